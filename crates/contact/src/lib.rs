@@ -1,0 +1,1 @@
+//! Colliders (parry3d) against particles (issue 5; not built yet).

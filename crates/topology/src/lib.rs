@@ -1,0 +1,1 @@
+//! Tet mesh topology (being written).
