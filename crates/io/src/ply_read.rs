@@ -1,0 +1,131 @@
+//! PLY reader (ASCII and binary, through ply-rs-bw).
+//!
+//! Reads `vertex` `x y z` (any numeric type), `face` `vertex_indices` or `vertex_index` (a list
+//! of any integer type; polygons fan-triangulated) and an optional per-face `crack` scalar.
+
+use crate::{IoError, SurfaceData};
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+use std::path::Path;
+
+/// Reads a PLY surface and, when the faces carry a `crack` property, the per-triangle flags
+/// (a polygon's flag is repeated for each of its triangles).
+pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoError> {
+    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
+    let mut reader = std::io::BufReader::new(file);
+    let parser = Parser::<DefaultElement>::new();
+    let ply = parser.read_ply(&mut reader).map_err(|e| {
+        let text = e.to_string();
+        match e.line() {
+            Some(line) => {
+                let message = text
+                    .strip_prefix(&format!("Line {line}: "))
+                    .unwrap_or(&text)
+                    .to_string();
+                IoError::parse(path, line, message)
+            }
+            None => format_error(path, text),
+        }
+    })?;
+    let mut surface = SurfaceData::default();
+    if let Some(vertices) = ply.payload.get("vertex") {
+        surface.vertices.reserve(vertices.len());
+        for (i, v) in vertices.iter().enumerate() {
+            let mut p = [0.0; 3];
+            for (c, key) in p.iter_mut().zip(["x", "y", "z"]) {
+                *c = v.get(key).and_then(scalar_f64).ok_or_else(|| {
+                    format_error(
+                        path,
+                        format!("vertex {i} has no numeric \"{key}\" property"),
+                    )
+                })?;
+            }
+            surface.vertices.push(p);
+        }
+    } else {
+        return Err(format_error(path, "no \"vertex\" element".into()));
+    }
+    let n = surface.vertices.len();
+    let has_crack = ply
+        .header
+        .elements
+        .get("face")
+        .is_some_and(|f| f.properties.contains_key("crack"));
+    let mut crack = has_crack.then(Vec::new);
+    for (i, f) in ply.payload.get("face").into_iter().flatten().enumerate() {
+        let list = f
+            .get("vertex_indices")
+            .or_else(|| f.get("vertex_index"))
+            .and_then(Property::to_u32_list)
+            .ok_or_else(|| {
+                format_error(
+                    path,
+                    format!("face {i} has no integer \"vertex_indices\" list"),
+                )
+            })?;
+        if list.len() < 3 {
+            return Err(format_error(
+                path,
+                format!("face {i} has {} vertices, expected at least 3", list.len()),
+            ));
+        }
+        if let Some(&bad) = list.iter().find(|&&v| v as usize >= n) {
+            return Err(format_error(
+                path,
+                format!("face {i}: vertex index {bad} out of range ({n} vertices)"),
+            ));
+        }
+        let flag = match (&crack, f.get("crack")) {
+            (Some(_), Some(p)) => scalar_u8(p).ok_or_else(|| {
+                format_error(
+                    path,
+                    format!("face {i}: crack value {p:?} is not an integer 0..255"),
+                )
+            })?,
+            _ => 0,
+        };
+        for k in 2..list.len() {
+            if let (Some(&a), Some(&b), Some(&c)) = (list.first(), list.get(k - 1), list.get(k)) {
+                surface.faces.push([a, b, c]);
+                if let Some(cr) = &mut crack {
+                    cr.push(flag);
+                }
+            }
+        }
+    }
+    Ok((surface, crack))
+}
+
+fn format_error(path: &Path, message: String) -> IoError {
+    IoError::Format {
+        file: path.to_path_buf(),
+        message,
+    }
+}
+
+fn scalar_f64(p: &Property) -> Option<f64> {
+    match *p {
+        Property::Float(v) => Some(f64::from(v)),
+        Property::Double(v) => Some(v),
+        Property::Char(v) => Some(f64::from(v)),
+        Property::UChar(v) => Some(f64::from(v)),
+        Property::Short(v) => Some(f64::from(v)),
+        Property::UShort(v) => Some(f64::from(v)),
+        Property::Int(v) => Some(f64::from(v)),
+        Property::UInt(v) => Some(f64::from(v)),
+        _ => None,
+    }
+}
+
+fn scalar_u8(p: &Property) -> Option<u8> {
+    let v: i64 = match *p {
+        Property::Char(v) => v.into(),
+        Property::UChar(v) => v.into(),
+        Property::Short(v) => v.into(),
+        Property::UShort(v) => v.into(),
+        Property::Int(v) => v.into(),
+        Property::UInt(v) => v.into(),
+        _ => return None,
+    };
+    u8::try_from(v).ok()
+}
