@@ -1,1 +1,29 @@
-//! Tet mesh topology (being written).
+//! Tet mesh topology for perifrac.
+//!
+//! The tetrahedral mesh that the peridynamic particles are embedded in (one particle per tet,
+//! tet index == particle index): rest mesh and face adjacency, the crack face set, multi-way
+//! vertex splitting, vertex advection from particle velocities, extraction of the surface of every
+//! piece with a crack flag, pieces, quality measures and built-in primitive meshes.
+//! See MODEL.md section 3 for the model.
+
+#![warn(missing_docs)]
+
+mod advect;
+mod build;
+mod crack;
+mod error;
+pub mod faces;
+mod mesh;
+mod pieces;
+pub mod primitives;
+mod quality;
+mod split;
+mod surface;
+
+pub use build::VOLUME_TOLERANCE;
+pub use error::TopologyError;
+pub use mesh::{BuildReport, TetMesh, NO_TET};
+pub use pieces::Pieces;
+pub use quality::{dihedral_angles_deg, radius_ratio, Quality};
+pub use split::SplitReport;
+pub use surface::Surface;
