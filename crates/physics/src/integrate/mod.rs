@@ -1,0 +1,5 @@
+//! Time integrators.
+
+pub mod explicit;
+
+pub use explicit::{Explicit, ExplicitConfig, TimeStep};

@@ -1,0 +1,472 @@
+//! The Chen elastoplastic state-based model with fracture (MODEL.md section 2, with its
+//! Decisions: `Lambda = 1`, `ed = e - theta r / 3`, return-map increment `/(4 omega b)`,
+//! threshold-scaled fracture).
+
+use super::kernel::{
+    dilatation, energy_density, force, return_map, AllAlive, Inputs, Isotropic, Mask, NoPlastic,
+    PerBond, WithPlastic,
+};
+use super::{ChenMaterial, ForceModel};
+use crate::error::PhysicsError;
+use crate::fracture::Damage;
+use crate::math::{mat_vec, norm, sub, Vec3, IDENTITY};
+use crate::par::{for_rows_mut, map_particles};
+use crate::particles::Discretization;
+use std::f64::consts::PI;
+
+/// Choices of the Chen model fixed at setup.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChenOptions {
+    /// Add the energy-consistent pressure term: `a_i theta_i` becomes
+    /// `a_i theta_i - (b_i c_i / 3) S_i`, `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j`, which
+    /// makes the force exactly `-dE/dy` of the stored energy (MODEL.md's force is not a gradient:
+    /// `theta` weights extensions by `omega` while `ed` removes `theta r / 3`). `S_i` vanishes for
+    /// homogeneous deformations of the continuum, so the moduli are unchanged.
+    pub energy_consistent: bool,
+    /// Per-particle calibration from the discrete family (MODEL.md section 2 lists it as an
+    /// option): `c_i = 3 / sum_j omega_ij r_ij V_j`, `a_i = kappa_i c_i / 2` and
+    /// `b_i = 15 mu_i / (2 sum_j omega_ij r_ij^2 V_j)` instead of `9 / (4 pi delta^4)`,
+    /// `9 kappa / (8 pi delta^4)` and `15 mu / (2 pi delta^5)`. A uniform dilatation `eps` then
+    /// gives `theta = 3 eps` and `ed = 0` on every bond of every particle, surface ones
+    /// included, which MODEL.md's pressure-free Decision needs on a discrete mesh (with the
+    /// uniform constants interior Kuhn-lattice particles get `theta = 3.077 eps` and surface ones
+    /// as little as a quarter of it, so pressure leaks into `A_dev` and yields), and the
+    /// measured moduli of a bar come closer (see tests/moduli.rs). It stiffens cut families
+    /// (corners most), which raises `omega_max`: 7.89e5 to 1.23e6 rad/s on a 3 x 3 x 3-cell
+    /// steel block at k = 1.5, so the stable step shrinks by a third.
+    pub calibrated: bool,
+}
+
+impl Default for ChenOptions {
+    fn default() -> Self {
+        ChenOptions {
+            energy_consistent: true,
+            calibrated: true,
+        }
+    }
+}
+
+/// What is fixed at setup: discretisation, constants, weights, yield parameters.
+#[derive(Debug, Clone)]
+struct Setup {
+    disc: Discretization,
+    mass: Vec<f64>,
+    density: Vec<f64>,
+    /// `a_i = kappa_i c_i / 2` (`9 kappa_i / (8 pi delta^4)` uncalibrated).
+    coef_a: Vec<f64>,
+    /// `b_i = 15 mu_i / (2 m_i)`, `m_i = pi delta^5` uncalibrated.
+    coef_b: Vec<f64>,
+    /// Per-particle `c_i` (`9 / (4 pi delta^4)` unless calibrated).
+    c_theta: Vec<f64>,
+    /// Per-bond `omega` when some material is anisotropic.
+    weights: Option<Vec<f64>>,
+    /// Reverse-bond index, when plastic or anisotropic.
+    reverse: Option<Vec<u32>>,
+    /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
+    yield_params: Option<Vec<(f64, f64)>>,
+    options: ChenOptions,
+}
+
+/// The Chen model over one discretisation, with its state and the per-step buffers it owns.
+#[derive(Debug, Clone)]
+pub struct ChenModel {
+    setup: Setup,
+    /// Plastic extension per directed bond (m), only when plastic.
+    ep: Option<Vec<f64>>,
+    damage: Option<Damage>,
+    /// Per particle `(theta_i, S_i)` from the last dilatation pass.
+    ts: Vec<[f64; 2]>,
+    pq: Vec<[f64; 2]>,
+    scratch: Vec<f64>,
+}
+
+/// Binds `$w` (weights) and `$d` (damage mask) to concrete view types and expands `$body` once
+/// per combination, so every bond loop is monomorphised.
+macro_rules! with_wd {
+    ($setup:expr, $damage:expr, |$w:ident, $d:ident| $body:expr) => {
+        match $damage {
+            None => {
+                let $d = AllAlive;
+                with_wd!(@w $setup, $w, $body)
+            }
+            Some(dm) => {
+                let $d = Mask(dm.bond_state());
+                with_wd!(@w $setup, $w, $body)
+            }
+        }
+    };
+    (@w $setup:expr, $w:ident, $body:expr) => {
+        match $setup.weights.as_deref() {
+            None => {
+                let $w = Isotropic { delta: $setup.disc.horizon() };
+                $body
+            }
+            Some(wv) => {
+                let $w = PerBond { w: wv, rev: $setup.reverse.as_deref().expect("reverse index") };
+                $body
+            }
+        }
+    };
+}
+
+/// As `with_wd`, also binding `$p` to the plastic view.
+macro_rules! with_wpd {
+    ($setup:expr, $ep:expr, $damage:expr, |$w:ident, $p:ident, $d:ident| $body:expr) => {
+        match $ep {
+            None => {
+                let $p = NoPlastic;
+                with_wd!($setup, $damage, |$w, $d| $body)
+            }
+            Some(ep) => {
+                let $p = WithPlastic {
+                    ep,
+                    rev: $setup.reverse.as_deref().expect("reverse index"),
+                };
+                with_wd!($setup, $damage, |$w, $d| $body)
+            }
+        }
+    };
+}
+
+impl ChenModel {
+    /// Sets up the model with `materials[id]` for each particle's material id. Plastic and damage
+    /// state are allocated only when some material asks for them.
+    pub fn new(disc: Discretization, materials: &[ChenMaterial]) -> Result<Self, PhysicsError> {
+        Self::with_options(disc, materials, ChenOptions::default())
+    }
+
+    /// As [`ChenModel::new`], with explicit [`ChenOptions`].
+    pub fn with_options(
+        disc: Discretization,
+        materials: &[ChenMaterial],
+        options: ChenOptions,
+    ) -> Result<Self, PhysicsError> {
+        for (m, mat) in materials.iter().enumerate() {
+            mat.validate(m)?;
+        }
+        let n = disc.len();
+        for (i, &id) in disc.materials().iter().enumerate() {
+            if id as usize >= materials.len() {
+                return Err(PhysicsError::UnknownMaterial {
+                    particle: i,
+                    material: id,
+                    count: materials.len(),
+                });
+            }
+        }
+        let delta = disc.horizon();
+        let mat = |i: usize| &materials[disc.materials()[i] as usize];
+        let fam = disc.family();
+        let anisotropic = materials.iter().any(|m| m.anisotropy.is_some());
+        let weights = anisotropic.then(|| {
+            let x = disc.rest_positions();
+            let mut w = vec![0.0; fam.num_bonds()];
+            for i in 0..n {
+                let g = mat(i).anisotropy.unwrap_or(IDENTITY);
+                for k in fam.range(i) {
+                    let xi = sub(x[fam.neighbours()[k] as usize], x[i]);
+                    w[k] = delta / norm(mat_vec(&g, xi));
+                }
+            }
+            w
+        });
+        // discrete family moments sum_j omega r V and sum_j omega r^2 V
+        let moments: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                fam.range(i).fold((0.0, 0.0), |(m1, m2), k| {
+                    let r = fam.rest_lengths()[k];
+                    let w = weights.as_ref().map_or(delta / r, |w| w[k]);
+                    let wv = w * disc.volumes()[fam.neighbours()[k] as usize];
+                    (m1 + wv * r, m2 + wv * r * r)
+                })
+            })
+            .collect();
+        let c0 = 9.0 / (4.0 * PI * delta.powi(4));
+        let c_theta: Vec<f64> = (0..n)
+            .map(|i| match moments[i].0 {
+                m1 if options.calibrated && m1 > 0.0 => 3.0 / m1,
+                _ => c0,
+            })
+            .collect();
+        // a_i = kappa c_i / 2 (= 9 kappa / (8 pi delta^4) uncalibrated): the energy density
+        // a theta^2 / c_i is then exactly kappa (3 eps)^2 / 2 under a uniform dilatation
+        let coef_a = (0..n)
+            .map(|i| mat(i).bulk_modulus * c_theta[i] / 2.0)
+            .collect();
+        let coef_b = (0..n)
+            .map(|i| match moments[i].1 {
+                m2 if options.calibrated && m2 > 0.0 => 15.0 * mat(i).shear_modulus / (2.0 * m2),
+                _ => 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5)),
+            })
+            .collect();
+        let density: Vec<f64> = (0..n).map(|i| mat(i).density).collect();
+        let mass = (0..n).map(|i| density[i] * disc.volumes()[i]).collect();
+        let plastic = materials.iter().any(|m| m.plasticity.is_some());
+        let fractures = materials.iter().any(ChenMaterial::fractures);
+        let reverse = (anisotropic || plastic).then(|| fam.reverse_index());
+        let yield_params = plastic.then(|| {
+            (0..n)
+                .map(|i| {
+                    mat(i)
+                        .plasticity
+                        .map_or((f64::INFINITY, f64::INFINITY), |p| (p.psi0, p.gamma_ratio))
+                })
+                .collect()
+        });
+        let damage = fractures.then(|| {
+            let s_crit = (0..n)
+                .map(|i| mat(i).fracture.map_or(f64::INFINITY, |f| f.s_crit))
+                .collect();
+            let alpha = (0..n)
+                .map(|i| mat(i).fracture.map_or(0.0, |f| f.alpha))
+                .collect();
+            Damage::new(fam, s_crit, alpha)
+        });
+        let ep = plastic.then(|| vec![0.0; fam.num_bonds()]);
+        Ok(ChenModel {
+            setup: Setup {
+                c_theta,
+                mass,
+                density,
+                coef_a,
+                coef_b,
+                weights,
+                reverse,
+                yield_params,
+                options,
+                disc,
+            },
+            ep,
+            damage,
+            ts: vec![[0.0; 2]; n],
+            pq: vec![[0.0; 2]; n],
+            scratch: vec![0.0; n],
+        })
+    }
+
+    /// The discretisation.
+    pub fn discretization(&self) -> &Discretization {
+        &self.setup.disc
+    }
+
+    /// Dilatation `theta_i` of each particle from the last force or energy evaluation
+    /// (dimensionless; a copy).
+    pub fn dilatations(&self) -> Vec<f64> {
+        self.ts.iter().map(|t| t[0]).collect()
+    }
+
+    /// The options chosen at setup.
+    pub fn options(&self) -> ChenOptions {
+        self.setup.options
+    }
+
+    /// Plastic extension per directed bond (m), when some material is plastic.
+    pub fn plastic_extension(&self) -> Option<&[f64]> {
+        self.ep.as_deref()
+    }
+
+    /// Mutable plastic extensions (m), e.g. to restore a checkpoint.
+    pub fn plastic_extension_mut(&mut self) -> Option<&mut [f64]> {
+        self.ep.as_deref_mut()
+    }
+
+    /// Damage state, when some material fractures.
+    pub fn damage(&self) -> Option<&Damage> {
+        self.damage.as_ref()
+    }
+
+    /// Constants `(a_i, b_i)` of particle `i` (N/m^6 per unit dilatation, N/m^7 per m).
+    pub fn constants(&self, i: usize) -> (f64, f64) {
+        (self.setup.coef_a[i], self.setup.coef_b[i])
+    }
+
+    /// Recomputes `theta` at `y` (and runs the return map when `advance`), then `pq`.
+    fn dilatation_pass(&mut self, y: &[Vec3], advance: bool) {
+        let s = &self.setup;
+        let inp = Inputs {
+            family: s.disc.family(),
+            y,
+            volumes: s.disc.volumes(),
+            c_theta: &s.c_theta,
+        };
+        let moment = s.options.energy_consistent;
+        match (self.ep.as_deref_mut(), &s.yield_params, advance) {
+            (Some(ep), Some(yp), true) => {
+                let offsets = inp.family.offsets();
+                with_wd!(s, self.damage.as_ref(), |w, d| {
+                    let body = |first: usize, ts: &mut [[f64; 2]], ep: &mut [f64]| {
+                        let base = offsets[first] as usize;
+                        for (o, t) in ts.iter_mut().enumerate() {
+                            let i = first + o;
+                            let r = inp.family.range(i);
+                            let (theta, _) = dilatation::<_, _, _, false>(inp, w, NoPlastic, d, i);
+                            let (psi0, gr) = yp[i];
+                            let own = &mut ep[r.start - base..r.end - base];
+                            let b = s.coef_b[i];
+                            *t = [theta, return_map(inp, w, d, i, theta, b, psi0, gr, own)];
+                        }
+                    };
+                    for_rows_mut(offsets, &mut self.ts, ep, &body);
+                })
+            }
+            _ => with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
+                let ts = &mut self.ts;
+                if moment {
+                    map_particles(ts, |i| dilatation::<_, _, _, true>(inp, w, p, d, i).into())
+                } else {
+                    map_particles(ts, |i| dilatation::<_, _, _, false>(inp, w, p, d, i).into())
+                }
+            }),
+        }
+        let (a, b, ts) = (&s.coef_a, &s.coef_b, &self.ts);
+        let c = &s.c_theta;
+        let k = if moment { 1.0 / 3.0 } else { 0.0 };
+        map_particles(&mut self.pq, |i| {
+            let [theta, m] = ts[i];
+            [a[i] * theta - k * c[i] * b[i] * m, b[i] * theta / 3.0]
+        });
+    }
+
+    /// Force pass: `forces[i]` (N) from the current `pq`.
+    fn force_pass(&self, y: &[Vec3], forces: &mut [Vec3]) {
+        let s = &self.setup;
+        let inp = Inputs {
+            family: s.disc.family(),
+            y,
+            volumes: s.disc.volumes(),
+            c_theta: &s.c_theta,
+        };
+        let (pq, b) = (&self.pq, &s.coef_b);
+        with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
+            map_particles(forces, |i| force(inp, w, p, d, pq, b, i))
+        })
+    }
+
+    #[track_caller]
+    fn check_len(&self, y: &[Vec3], forces: Option<&[Vec3]>) {
+        let n = self.setup.disc.len();
+        assert_eq!(y.len(), n, "positions: one per particle");
+        if let Some(f) = forces {
+            assert_eq!(f.len(), n, "forces: one per particle");
+        }
+    }
+}
+
+impl ForceModel for ChenModel {
+    fn num_particles(&self) -> usize {
+        self.setup.disc.len()
+    }
+
+    fn masses(&self) -> &[f64] {
+        &self.setup.mass
+    }
+
+    fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.check_len(y, Some(forces));
+        self.dilatation_pass(y, true);
+        self.force_pass(y, forces);
+    }
+
+    fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.check_len(y, Some(forces));
+        self.dilatation_pass(y, false);
+        self.force_pass(y, forces);
+    }
+
+    fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
+        self.check_len(y, None);
+        self.dilatation_pass(y, false);
+        let s = &self.setup;
+        let inp = Inputs {
+            family: s.disc.family(),
+            y,
+            volumes: s.disc.volumes(),
+            c_theta: &s.c_theta,
+        };
+        let ts = &self.ts;
+        with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
+            map_particles(&mut self.scratch, |i| {
+                let (a, b) = (s.coef_a[i], s.coef_b[i]);
+                inp.volumes[i] * energy_density(inp, w, p, d, i, ts[i][0], a, b)
+            })
+        });
+        self.scratch.iter().sum()
+    }
+
+    fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        let Some(damage) = self.damage.as_mut() else {
+            return;
+        };
+        let s = &self.setup;
+        let delta = s.disc.horizon();
+        match self.ep.as_deref() {
+            None => damage.check(s.disc.family(), y, delta, NoPlastic, broken),
+            Some(ep) => {
+                let rev = s.reverse.as_deref().expect("reverse index");
+                damage.check(s.disc.family(), y, delta, WithPlastic { ep, rev }, broken)
+            }
+        }
+    }
+
+    fn silling_askari_step(&self) -> f64 {
+        // Micromodulus of the pair force density 0.5 (A_ij + A_ji) against the bond extension,
+        // direct terms only: C_ij = 2 (omega_ij b_i + omega_ji b_j) + 2 c_i a_i omega_ij^2 V_j
+        // + 2 c_j a_j omega_ji^2 V_i (N/m^7).
+        let s = &self.setup;
+        let fam = s.disc.family();
+        let vol = s.disc.volumes();
+        let delta = s.disc.horizon();
+        let mut dt = f64::INFINITY;
+        for i in 0..fam.len() {
+            let mut sum = 0.0;
+            for k in fam.range(i) {
+                let j = fam.neighbours()[k] as usize;
+                let r = fam.rest_lengths()[k];
+                let (wij, wji) = match (&s.weights, &s.reverse) {
+                    (Some(w), Some(rev)) => (w[k], w[rev[k] as usize]),
+                    _ => (delta / r, delta / r),
+                };
+                let c = 2.0 * (wij * s.coef_b[i] + wji * s.coef_b[j])
+                    + 2.0 * s.c_theta[i] * s.coef_a[i] * wij * wij * vol[j]
+                    + 2.0 * s.c_theta[j] * s.coef_a[j] * wji * wji * vol[i];
+                sum += c * vol[j];
+            }
+            if sum > 0.0 {
+                dt = dt.min((2.0 * s.density[i] / sum).sqrt());
+            }
+        }
+        dt
+    }
+
+    fn memory_bytes(&self) -> usize {
+        let ChenModel {
+            setup,
+            ep,
+            damage,
+            ts,
+            pq,
+            scratch,
+        } = self;
+        let Setup {
+            disc,
+            mass,
+            density,
+            coef_a,
+            coef_b,
+            c_theta,
+            weights,
+            reverse,
+            yield_params,
+            options: _,
+        } = setup;
+        disc.memory_bytes()
+            + 8 * (mass.len() + density.len() + coef_a.len() + coef_b.len() + c_theta.len())
+            + weights.as_ref().map_or(0, |w| 8 * w.len())
+            + reverse.as_ref().map_or(0, |r| 4 * r.len())
+            + yield_params.as_ref().map_or(0, |y| 16 * y.len())
+            + ep.as_ref().map_or(0, |e| 8 * e.len())
+            + damage.as_ref().map_or(0, Damage::memory_bytes)
+            + 8 * scratch.len()
+            + 16 * (pq.len() + ts.len())
+    }
+}

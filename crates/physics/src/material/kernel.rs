@@ -1,0 +1,250 @@
+//! The Chen bond loops, generic over the bond weight, the plastic extension and the damage mask.
+//! Each variant is monomorphised, so the elastic loop carries no plastic or fracture branch.
+
+use crate::family::Family;
+use crate::math::{norm, sub, Vec3};
+
+/// Bond weights `omega_ij` (own side) and `omega_ji` (the other side) of bond `k`.
+pub(crate) trait Weights: Sync + Copy {
+    fn pair(&self, k: usize, r: f64) -> (f64, f64);
+}
+
+/// Isotropic weight `delta / r`, the same both ways.
+#[derive(Clone, Copy)]
+pub(crate) struct Isotropic {
+    pub delta: f64,
+}
+
+impl Weights for Isotropic {
+    #[inline(always)]
+    fn pair(&self, _k: usize, r: f64) -> (f64, f64) {
+        let w = self.delta / r;
+        (w, w)
+    }
+}
+
+/// Per-directed-bond weights (anisotropy), with the reverse-bond index.
+#[derive(Clone, Copy)]
+pub(crate) struct PerBond<'a> {
+    pub w: &'a [f64],
+    pub rev: &'a [u32],
+}
+
+impl Weights for PerBond<'_> {
+    #[inline(always)]
+    fn pair(&self, k: usize, _r: f64) -> (f64, f64) {
+        (self.w[k], self.w[self.rev[k] as usize])
+    }
+}
+
+/// Plastic extensions `ep_ij`, `ep_ji` of bond `k`.
+pub(crate) trait Plastic: Sync + Copy {
+    fn pair(&self, k: usize) -> (f64, f64);
+}
+
+/// Elastic material: no plastic extension.
+#[derive(Clone, Copy)]
+pub(crate) struct NoPlastic;
+
+impl Plastic for NoPlastic {
+    #[inline(always)]
+    fn pair(&self, _k: usize) -> (f64, f64) {
+        (0.0, 0.0)
+    }
+}
+
+/// Stored plastic extensions with the reverse-bond index.
+#[derive(Clone, Copy)]
+pub(crate) struct WithPlastic<'a> {
+    pub ep: &'a [f64],
+    pub rev: &'a [u32],
+}
+
+impl Plastic for WithPlastic<'_> {
+    #[inline(always)]
+    fn pair(&self, k: usize) -> (f64, f64) {
+        (self.ep[k], self.ep[self.rev[k] as usize])
+    }
+}
+
+/// Which bonds are intact.
+pub(crate) trait Alive: Sync + Copy {
+    fn alive(&self, k: usize) -> bool;
+}
+
+/// No damage state: every bond is intact.
+#[derive(Clone, Copy)]
+pub(crate) struct AllAlive;
+
+impl Alive for AllAlive {
+    #[inline(always)]
+    fn alive(&self, _k: usize) -> bool {
+        true
+    }
+}
+
+/// Damage mask: 1 intact, 0 broken.
+#[derive(Clone, Copy)]
+pub(crate) struct Mask<'a>(pub &'a [u8]);
+
+impl Alive for Mask<'_> {
+    #[inline(always)]
+    fn alive(&self, k: usize) -> bool {
+        self.0[k] != 0
+    }
+}
+
+/// Read-only inputs shared by the loops.
+#[derive(Clone, Copy)]
+pub(crate) struct Inputs<'a> {
+    pub family: &'a Family,
+    pub y: &'a [Vec3],
+    pub volumes: &'a [f64],
+    /// Per-particle dilatation constant `c_i` (`9 / (4 pi delta^4)` uncalibrated).
+    pub c_theta: &'a [f64],
+}
+
+/// Dilatation `theta_i = c sum_j omega_ij e_ij V_j` over intact bonds, and, when `MOMENT`, the
+/// deviatoric moment `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j` of the energy-consistent
+/// pressure term (0 otherwise).
+#[inline(always)]
+pub(crate) fn dilatation<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
+    inp: Inputs,
+    w: W,
+    p: P,
+    d: D,
+    i: usize,
+) -> (f64, f64) {
+    let fam = inp.family;
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    let yi = inp.y[i];
+    let (mut acc, mut u, mut m) = (0.0, 0.0, 0.0);
+    for k in fam.range(i) {
+        if !d.alive(k) {
+            continue;
+        }
+        let j = nb[k] as usize;
+        let r = rl[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        let wv = w.pair(k, r).0 * inp.volumes[j];
+        acc += wv * e;
+        if MOMENT {
+            u += wv * r * (e - p.pair(k).0);
+            m += wv * r * r;
+        }
+    }
+    let theta = inp.c_theta[i] * acc;
+    (theta, u - theta * m / 3.0)
+}
+
+/// Return map of particle `i`'s own bonds (MODEL.md, Plasticity): `ep` is this particle's slice.
+/// Returns the deviatoric moment `S_i` with the updated plastic extensions.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn return_map<W: Weights, D: Alive>(
+    inp: Inputs,
+    w: W,
+    d: D,
+    i: usize,
+    theta: f64,
+    b: f64,
+    psi0: f64,
+    gamma_ratio: f64,
+    ep: &mut [f64],
+) -> f64 {
+    let fam = inp.family;
+    let range = fam.range(i);
+    let first = range.start;
+    let yi = inp.y[i];
+    let mut moment = 0.0;
+    for k in range {
+        if !d.alive(k) {
+            continue;
+        }
+        let j = fam.neighbours()[k] as usize;
+        let r = fam.rest_lengths()[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        let slot = &mut ep[k - first];
+        let wij = w.pair(k, r).0;
+        let four_wb = 4.0 * wij * b;
+        let ed = e - theta * r / 3.0;
+        let trial = four_wb * (ed - *slot);
+        *slot = crate::plastic::return_map_bond(trial, *slot, four_wb, psi0, gamma_ratio * r);
+        moment += wij * r * (ed - *slot) * inp.volumes[j];
+    }
+    moment
+}
+
+/// Force on particle `i` (N): `V_i sum_j 0.5 (A_ij + A_ji) n_ij V_j` over intact bonds, where
+/// `pq[j] = [a_j theta_j, b_j theta_j / 3]` and `coef_b[j] = b_j` come from the dilatation pass.
+#[inline(always)]
+pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
+    inp: Inputs,
+    w: W,
+    p: P,
+    d: D,
+    pq: &[[f64; 2]],
+    coef_b: &[f64],
+    i: usize,
+) -> Vec3 {
+    let fam = inp.family;
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    let yi = inp.y[i];
+    let vi = inp.volumes[i];
+    let [pi, qi] = pq[i];
+    let bi = coef_b[i];
+    let mut acc = [0.0; 3];
+    for k in fam.range(i) {
+        if !d.alive(k) {
+            continue;
+        }
+        let j = nb[k] as usize;
+        let r = rl[k];
+        let eta = sub(inp.y[j], yi);
+        let l = norm(eta);
+        let e = l - r;
+        let (wij, wji) = w.pair(k, r);
+        let (epij, epji) = p.pair(k);
+        let [pj, qj] = pq[j];
+        let aij = wij * (pi + bi * (e - epij) - qi * r);
+        let aji = wji * (pj + coef_b[j] * (e - epji) - qj * r);
+        // 0.5 (A_ij + A_ji) with A = 4 omega (...): the pair scalar is bitwise the same from both
+        // ends (commutative sums and products), so Newton's third law holds bond by bond.
+        let s = 2.0 * (aij + aji) * (vi * inp.volumes[j]) / l;
+        acc[0] += s * eta[0];
+        acc[1] += s * eta[1];
+        acc[2] += s * eta[2];
+    }
+    acc
+}
+
+/// Elastic energy density `W_i = kappa_i theta_i^2 / 2 + b_i sum_j omega_ij (ed_ij - ep_ij)^2 V_j`
+/// (J/m^3), with `kappa_i theta^2 / 2 = a_i theta^2 / c_i` (`a_i = kappa_i c_i / 2`).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn energy_density<W: Weights, P: Plastic, D: Alive>(
+    inp: Inputs,
+    w: W,
+    p: P,
+    d: D,
+    i: usize,
+    theta: f64,
+    a: f64,
+    b: f64,
+) -> f64 {
+    let fam = inp.family;
+    let yi = inp.y[i];
+    let mut dev = 0.0;
+    for k in fam.range(i) {
+        if !d.alive(k) {
+            continue;
+        }
+        let j = fam.neighbours()[k] as usize;
+        let r = fam.rest_lengths()[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        let ed = e - theta * r / 3.0 - p.pair(k).0;
+        dev += w.pair(k, r).0 * ed * ed * inp.volumes[j];
+    }
+    a * theta * theta / inp.c_theta[i] + b * dev
+}

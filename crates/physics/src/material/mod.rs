@@ -1,0 +1,68 @@
+//! Materials: parameters and the force-model interface the integrators drive.
+
+pub mod chen;
+pub(crate) mod kernel;
+pub mod params;
+
+pub use chen::{ChenModel, ChenOptions};
+pub use params::{ChenMaterial, FractureParams, YieldParams};
+
+use crate::math::Vec3;
+
+/// A constitutive model over a fixed discretisation: the integrators see only this interface, so
+/// other models (Xu's hyperelastic energy) and other integrators (implicit) plug in beside it.
+/// Positions are in m, forces in N, energies in J.
+pub trait ForceModel: Send {
+    /// Number of particles.
+    fn num_particles(&self) -> usize;
+
+    /// Particle masses (kg).
+    fn masses(&self) -> &[f64];
+
+    /// Internal forces at positions `y`, advancing history-dependent state (plastic return map).
+    fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]);
+
+    /// Internal forces at `y` with the current history, leaving every internal state unchanged
+    /// (used by the stable-step estimate and diagnostics).
+    fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]);
+
+    /// Elastic (stored) energy at `y` with the current history (J).
+    fn elastic_energy(&mut self, y: &[Vec3]) -> f64;
+
+    /// Breaks bonds at `y` by the damage criterion and appends the newly broken pairs
+    /// `(i, j)`, `i < j`, once each, to `broken`. Models without damage do nothing.
+    fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>);
+
+    /// Per-particle Silling-Askari bound `sqrt(2 rho / sum_j C_ij V_j)` minimised over particles (s).
+    fn silling_askari_step(&self) -> f64;
+
+    /// Heap bytes owned by the model (discretisation, state, buffers).
+    fn memory_bytes(&self) -> usize;
+}
+
+impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
+    fn num_particles(&self) -> usize {
+        (**self).num_particles()
+    }
+    fn masses(&self) -> &[f64] {
+        (**self).masses()
+    }
+    fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        (**self).update_forces(y, forces)
+    }
+    fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        (**self).trial_forces(y, forces)
+    }
+    fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
+        (**self).elastic_energy(y)
+    }
+    fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        (**self).break_bonds(y, broken)
+    }
+    fn silling_askari_step(&self) -> f64 {
+        (**self).silling_askari_step()
+    }
+    fn memory_bytes(&self) -> usize {
+        (**self).memory_bytes()
+    }
+}

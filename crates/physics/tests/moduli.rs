@@ -1,0 +1,234 @@
+//! Measured elastic constants: Young's modulus and Poisson's ratio from a bar in uniaxial
+//! tension (damped to rest), and the speed of a pulse along a bar against sqrt(E / rho).
+
+mod support;
+
+use perifrac_physics::{
+    ChenMaterial, ChenModel, ChenOptions, Explicit, ExplicitConfig, Loads, TimeStep,
+};
+use support::block;
+
+/// Least-squares slope of `v` against `u`.
+fn slope(u: &[f64], v: &[f64]) -> f64 {
+    let n = u.len() as f64;
+    let (mu, mv) = (u.iter().sum::<f64>() / n, v.iter().sum::<f64>() / n);
+    let cov: f64 = u.iter().zip(v).map(|(a, b)| (a - mu) * (b - mv)).sum();
+    let var: f64 = u.iter().map(|a| (a - mu) * (a - mu)).sum();
+    cov / var
+}
+
+/// Measured (E / E_nominal, nu) of a bar `cells` (cube cells of 5 mm) with horizon factor `k`,
+/// both ends anchored (one fixed, one pulled to 0.1% strain), damped to rest. Strains are fitted
+/// over the middle third; the stress is the anchor reaction over the nominal cross-section.
+fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) {
+    let h = 0.02 / cells[1] as f64;
+    let size = [
+        cells[0] as f64 * h,
+        cells[1] as f64 * h,
+        cells[2] as f64 * h,
+    ];
+    let (disc, _, _) = block(size, cells, k);
+    let x = disc.rest_positions().to_vec();
+    let delta = disc.horizon();
+    let young = 200e9;
+    let mat: ChenMaterial = ChenMaterial::from_young_poisson(young, nu, 7800.0).unwrap();
+    let m = ChenModel::with_options(disc, &[mat], opts).unwrap();
+    let len = size[0];
+    // the ends: particles within one horizon of them, so no free family is cut by an anchor
+    let left: Vec<u32> = (0..x.len() as u32)
+        .filter(|&i| x[i as usize][0] < delta)
+        .collect();
+    let right: Vec<u32> = (0..x.len() as u32)
+        .filter(|&i| x[i as usize][0] > len - delta)
+        .collect();
+    let c = (young / 7800.0).sqrt();
+    let omega1 = std::f64::consts::PI * c / len;
+    let mut loads = Loads::new(x.len()).with_damping(2.0 * omega1).unwrap();
+    loads.anchor(&left, [0.0; 3]).unwrap();
+    loads.anchor(&right, [0.0; 3]).unwrap();
+    let cfg = ExplicitConfig {
+        dt: TimeStep::Auto { safety: 0.8 },
+        guard_fraction: 0.5,
+    };
+    let mut s = Explicit::new(m, &x, delta, loads, cfg).unwrap();
+    // start from the affine guess with the nominal Poisson contraction
+    let eps = 1e-3;
+    let (cy, cz) = (size[1] / 2.0, size[2] / 2.0);
+    let guess: Vec<[f64; 3]> = x
+        .iter()
+        .map(|p| {
+            let ex = eps * p[0].clamp(delta, len - delta);
+            [
+                p[0] + ex,
+                p[1] - nu * eps * (p[1] - cy),
+                p[2] - nu * eps * (p[2] - cz),
+            ]
+        })
+        .collect();
+    s.set_positions(&guess);
+    let steps = (40.0 / omega1 / s.dt()).ceil() as usize;
+    for _ in 0..steps {
+        s.step().unwrap();
+    }
+    let y = s.positions();
+    let mid: Vec<usize> = (0..x.len())
+        .filter(|&i| (x[i][0] - len / 2.0).abs() < len / 6.0)
+        .collect();
+    let ux: Vec<f64> = mid.iter().map(|&i| y[i][0] - x[i][0]).collect();
+    let uy: Vec<f64> = mid.iter().map(|&i| y[i][1] - x[i][1]).collect();
+    let uz: Vec<f64> = mid.iter().map(|&i| y[i][2] - x[i][2]).collect();
+    let px: Vec<f64> = mid.iter().map(|&i| x[i][0]).collect();
+    let py: Vec<f64> = mid.iter().map(|&i| x[i][1]).collect();
+    let pz: Vec<f64> = mid.iter().map(|&i| x[i][2]).collect();
+    let exx = slope(&px, &ux);
+    let eyy = 0.5 * (slope(&py, &uy) + slope(&pz, &uz));
+    let reaction: f64 = right
+        .iter()
+        .map(|&i| s.forces()[i as usize][0])
+        .sum::<f64>();
+    let stress = -reaction / (size[1] * size[2]);
+    (stress / exx / young, -eyy / exx)
+}
+
+const MODEL_MD: ChenOptions = ChenOptions {
+    energy_consistent: true,
+    calibrated: false,
+};
+
+#[test]
+fn uniaxial_tension_moduli_improve_with_refinement() {
+    // Calibrated model (the default), nu = 0.25, k = 1.5. Bars of a 0.02 m section are only two
+    // to four horizons across, so the cut families near the surface dominate: measured
+    // E / E0 = 1.1617 and nu = 0.2750 at [16, 4, 4], 1.0864 and 0.2655 at [24, 6, 6] (1.0501 and
+    // 0.2631 at [32, 8, 8], see the ignored study). Bounds: the measured errors plus a margin,
+    // and strictly smaller errors on the finer bar.
+    let (e1, n1) = tension([16, 4, 4], 1.5, 0.25, ChenOptions::default());
+    let (e2, n2) = tension([24, 6, 6], 1.5, 0.25, ChenOptions::default());
+    eprintln!("[16, 4, 4]: E/E0 {e1:.4}, nu {n1:.4}; [24, 6, 6]: E/E0 {e2:.4}, nu {n2:.4}");
+    assert!((e1 - 1.0).abs() < 0.2 && (n1 - 0.25).abs() < 0.04);
+    assert!((e2 - 1.0).abs() < 0.1 && (n2 - 0.25).abs() < 0.03);
+    assert!((e2 - 1.0).abs() < (e1 - 1.0).abs() && (n2 - 0.25).abs() < (n1 - 0.25).abs());
+}
+
+#[test]
+fn uniaxial_tension_with_model_md_constants_is_soft_near_surfaces() {
+    // MODEL.md's uniform constants keep nu (cut families soften bulk and shear alike) but the
+    // bar is soft: measured E / E0 = 0.7872, nu = 0.2492 at [16, 4, 4], k = 1.5.
+    let (e, n) = tension([16, 4, 4], 1.5, 0.25, MODEL_MD);
+    eprintln!("MODEL.md constants [16, 4, 4]: E/E0 {e:.4}, nu {n:.4}");
+    assert!((0.75..0.85).contains(&e) && (n - 0.25).abs() < 0.02);
+}
+
+#[test]
+#[ignore = "slow (~2.5 min on 2 cores): convergence study of the measured moduli"]
+fn moduli_convergence_study() {
+    // Measured (E / E0, nu) for nu0 = 0.1 / 0.25 / 0.4, calibrated:
+    //   k 1.0: [16,4,4] 1.134 0.087 / 1.158 0.256 / 1.188 0.430
+    //          [24,6,6] 1.070 0.093 / 1.083 0.251 / 1.102 0.410
+    //          [32,8,8] 1.047 0.098 / 1.056 0.253 / 1.071 0.408
+    //   k 1.5: [16,4,4] 1.136 0.101 / 1.162 0.275 / 1.196 0.458
+    //          [24,6,6] 1.073 0.104 / 1.086 0.266 / 1.106 0.431
+    //          [32,8,8] 1.042 0.107 / 1.050 0.263 / 1.063 0.421
+    // MODEL.md constants:
+    //   k 1.0: [16,4,4] 0.781 0.079 / 0.785 0.235 / 0.808 0.414
+    //          [32,8,8] 0.795 0.081 / 0.798 0.233 / 0.814 0.396
+    //   k 1.5: [16,4,4] 0.783 0.094 / 0.787 0.249 / 0.812 0.435
+    //          [24,6,6] 0.836 0.099 / 0.838 0.252 / 0.853 0.418
+    //          [32,8,8] 0.862 0.104 / 0.862 0.254 / 0.873 0.412
+    for k in [1.0, 1.5] {
+        for nu in [0.1, 0.25, 0.4] {
+            let mut errors = Vec::new();
+            for cells in [[16, 4, 4], [24, 6, 6], [32, 8, 8]] {
+                let (e, n) = tension(cells, k, nu, ChenOptions::default());
+                let (m_e, m_n) = tension(cells, k, nu, MODEL_MD);
+                eprintln!(
+                    "{cells:?} k {k} nu0 {nu}: calibrated E/E0 {e:.4} nu {n:.4}; MODEL.md E/E0 {m_e:.4} nu {m_n:.4}"
+                );
+                errors.push(((e - 1.0).abs(), (n - nu).abs()));
+            }
+            let (e_fine, n_fine) = errors[2];
+            assert!(e_fine < 0.08 && n_fine < 0.025, "finest: {errors:?}");
+            assert!(errors[2].0 < errors[1].0 && errors[1].0 < errors[0].0);
+        }
+    }
+}
+
+/// Speed of the leading edge of a smooth pulse along a free bar of `cells` 5 mm cubes, from the
+/// half-peak arrival times at 30% and 70% of its length, over sqrt(E / rho).
+fn pulse_speed(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> f64 {
+    let h = 0.005;
+    let size = [
+        cells[0] as f64 * h,
+        cells[1] as f64 * h,
+        cells[2] as f64 * h,
+    ];
+    let (disc, _, _) = block(size, cells, k);
+    let x = disc.rest_positions().to_vec();
+    let delta = disc.horizon();
+    let young = 200e9;
+    let mat = ChenMaterial::from_young_poisson(young, nu, 7800.0).unwrap();
+    let c = (young / 7800.0).sqrt();
+    let m = ChenModel::with_options(disc, &[mat], opts).unwrap();
+    let cfg = ExplicitConfig {
+        dt: TimeStep::Auto { safety: 0.8 },
+        guard_fraction: 0.5,
+    };
+    let mut s = Explicit::new(m, &x, delta, Loads::new(x.len()), cfg).unwrap();
+    // a half-Gaussian velocity at the free end, sigma = 4 delta: its wavelengths are mostly above
+    // 12 delta, where the model's dispersion stays below 1% (MODEL.md section 2)
+    let w = 4.0 * delta;
+    for (v, p) in s.velocities_mut().iter_mut().zip(&x) {
+        v[0] = (-0.5 * (p[0] / w).powi(2)).exp();
+    }
+    let len = size[0];
+    let probe = |at: f64| -> Vec<usize> {
+        (0..x.len())
+            .filter(|&i| (x[i][0] - at * len).abs() < 0.5 * h)
+            .collect()
+    };
+    let (p1, p2) = (probe(0.3), probe(0.7));
+    let mean_v = |s: &Explicit<ChenModel>, set: &[usize]| {
+        set.iter().map(|&i| s.velocities()[i][0]).sum::<f64>() / set.len() as f64
+    };
+    let steps = (0.85 * len / c / s.dt()).ceil() as usize;
+    let (mut h1, mut h2) = (vec![0.0], vec![mean_v(&s, &p2)]);
+    h1[0] = mean_v(&s, &p1);
+    for _ in 0..steps {
+        s.step().unwrap();
+        h1.push(mean_v(&s, &p1));
+        h2.push(mean_v(&s, &p2));
+    }
+    // leading-edge time where the signal first reaches half its peak (linear interpolation)
+    let arrival = |hist: &[f64]| -> f64 {
+        let peak = hist.iter().cloned().fold(f64::MIN, f64::max);
+        let k = hist
+            .iter()
+            .position(|&v| v >= 0.5 * peak)
+            .expect("pulse arrives");
+        let (a, b) = (hist[k - 1], hist[k]);
+        (k as f64 - 1.0 + (0.5 * peak - a) / (b - a)) * s.dt()
+    };
+    0.4 * len / (arrival(&h2) - arrival(&h1)) / c
+}
+
+#[test]
+#[ignore = "documents the thin-bar surface effect on the wave speed"]
+fn pulse_speed_in_a_thin_bar() {
+    // A 3 x 3 cell section is 1.5 horizons across, so every particle is a surface particle and
+    // the bar is as stiff as its calibrated surface (E_eff ~ 1.2 E0): measured c / sqrt(E/rho)
+    // = 1.1000 (k = 1, nu = 0.25). The 5% check is on the thicker bar below.
+    let r = pulse_speed([160, 3, 3], 1.0, 0.25, ChenOptions::default());
+    eprintln!("[160, 3, 3] k 1: c / sqrt(E/rho) = {r:.4}");
+    assert!((r - 1.0).abs() < 0.12);
+}
+
+#[test]
+fn pulse_speed_within_five_percent() {
+    // A 1 m bar with a 4 x 4 cm section (76,800 particles, ~12 s here). Measured c / sqrt(E/rho)
+    // (calibrated, nu = 0.25): [200,8,8] k 1.0: 1.0280; thinner bars are stiffer from their
+    // calibrated surface: [160,4,4] k 1.5: 1.0743, [160,3,3] k 1.0: 1.1000. With MODEL.md's
+    // uniform constants the thin bars are soft: 0.881 and 0.867.
+    let r = pulse_speed([200, 8, 8], 1.0, 0.25, ChenOptions::default());
+    eprintln!("[200, 8, 8] k 1: c / sqrt(E/rho) = {r:.4}");
+    assert!((r - 1.0).abs() < 0.05);
+}

@@ -1,0 +1,83 @@
+//! Shared test helpers: tet blocks from the topology crate's primitives, deformations, norms.
+#![allow(dead_code)]
+
+use perifrac_physics::math::{add, mat_vec, norm, sub, Mat3, Vec3};
+use perifrac_physics::{ChenMaterial, ChenModel, Discretization, FamilyReport};
+use perifrac_topology::primitives::box_data;
+use perifrac_topology::TetMesh;
+
+/// A block `[0, size]` cut into `cells` cuboids (6 Kuhn tets each), horizon `k * lambda`.
+/// Returns the discretisation, the family report and `lambda` (mean edge length).
+pub fn block(size: [f64; 3], cells: [usize; 3], k: f64) -> (Discretization, FamilyReport, f64) {
+    let (v, t) = box_data([0.0; 3], size, cells);
+    let (mesh, _) = TetMesh::new(v, t).expect("box mesh");
+    let lambda = mesh.mean_edge_length();
+    let (disc, report) = Discretization::from_tets(
+        &mesh.rest_barycentres(),
+        &mesh.rest_volumes(),
+        mesh.neighbours(),
+        k * lambda,
+    )
+    .expect("discretisation");
+    (disc, report, lambda)
+}
+
+/// Steel-like test material: E = 200 GPa, nu = 0.25, rho = 7800 kg/m^3.
+pub fn steel() -> ChenMaterial {
+    ChenMaterial::from_young_poisson(200e9, 0.25, 7800.0).expect("valid")
+}
+
+/// An elastic Chen model on a block.
+pub fn elastic_block(cells: [usize; 3], k: f64) -> ChenModel {
+    let size = [
+        cells[0] as f64 * 0.01,
+        cells[1] as f64 * 0.01,
+        cells[2] as f64 * 0.01,
+    ];
+    let (disc, _, _) = block(size, cells, k);
+    ChenModel::new(disc, &[steel()]).expect("model")
+}
+
+/// `y_i = F X_i + c`.
+pub fn affine(x: &[Vec3], f: &Mat3, c: Vec3) -> Vec<Vec3> {
+    x.iter().map(|&p| add(mat_vec(f, p), c)).collect()
+}
+
+/// Root of the sum of squared norms.
+pub fn norm_all(v: &[Vec3]) -> f64 {
+    v.iter()
+        .map(|a| a[0] * a[0] + a[1] * a[1] + a[2] * a[2])
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Root of the sum of squared differences.
+pub fn diff_all(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| norm(sub(*p, *q)).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Particles at least `margin` from every face of the box `[0, size]`.
+pub fn interior(x: &[Vec3], size: [f64; 3], margin: f64) -> Vec<usize> {
+    (0..x.len())
+        .filter(|&i| (0..3).all(|d| x[i][d] > margin && x[i][d] < size[d] - margin))
+        .collect()
+}
+
+/// A smooth, non-uniform deformation of amplitude `amp` (dimensionless strain scale) on a body of
+/// size `l`: quadratic terms make the strain vary in space.
+pub fn nonuniform(x: &[Vec3], amp: f64, l: f64) -> Vec<Vec3> {
+    x.iter()
+        .map(|p| {
+            let (u, v, w) = (p[0] / l, p[1] / l, p[2] / l);
+            [
+                p[0] + amp * l * (0.7 * u + 0.3 * v * v - 0.2 * u * w),
+                p[1] + amp * l * (-0.4 * v + 0.5 * u * w + 0.1 * w),
+                p[2] + amp * l * (0.6 * w * w - 0.3 * u + 0.25 * u * v),
+            ]
+        })
+        .collect()
+}
