@@ -158,9 +158,15 @@ fn povray_mesh2_structure() {
     let status = Command::new("povray")
         .current_dir(dir.path())
         .args(["+Iscene.pov", "+W32", "+H32", "-D", "+Oout.png"])
-        .status()
+        .output()
         .unwrap();
-    assert!(status.success());
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    // POV-Ray writes the image only when the include parsed.
+    assert!(dir.path().join("out.png").exists());
 }
 
 #[test]
