@@ -101,9 +101,12 @@ pub fn measure(path: &Path) -> Result<MeshInfo> {
         ));
     }
     let listed = loaded.boundary_faces.len();
-    if listed > 0 && listed != mesh.boundary_face_count() {
+    let listed_on_boundary = count_on_boundary(&loaded.boundary_faces, &surface);
+    if listed > 0 && listed_on_boundary < listed {
         problems.push(format!(
-            "the file lists {listed} boundary triangles but the tets have {}",
+            "the file lists {listed} triangles but only {listed_on_boundary} lie on the tets' \
+             boundary ({} faces): the rest are inside the mesh, e.g. a surface embedded in \
+             tets that fill a larger region such as its convex hull",
             mesh.boundary_face_count()
         ));
     }
@@ -129,6 +132,23 @@ pub fn measure(path: &Path) -> Result<MeshInfo> {
         skipped: loaded.skipped.into_iter().collect(),
         problems,
     })
+}
+
+/// How many of the file's listed triangles are faces of the tets' boundary (any orientation).
+fn count_on_boundary(listed: &[[u32; 3]], surface: &perifrac_topology::Surface) -> usize {
+    let key = |mut f: [u32; 3]| {
+        f.sort_unstable();
+        f
+    };
+    let boundary: std::collections::HashSet<[u32; 3]> = surface
+        .faces
+        .iter()
+        .map(|f| key(f.map(|v| surface.vertex_ids[v as usize])))
+        .collect();
+    listed
+        .iter()
+        .filter(|f| boundary.contains(&key(**f)))
+        .count()
 }
 
 /// Prints the summary of `path` as text or JSON.
