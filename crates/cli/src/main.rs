@@ -37,16 +37,26 @@ enum Command {
         #[arg(long)]
         gmsh22: bool,
     },
-    /// Build a tet mesh from a built-in primitive, e.g. `box:1x0.2x1` or `bar:1x0.1x0.1`.
+    /// Build a tet mesh from a closed surface (built-in mesher or TetGen) or a built-in primitive.
     Mesh {
-        /// Primitive spec `box:LXxLYxLZ` (a box from the origin) or `bar:LxWxH`.
+        /// Closed surface (`.obj`, `.ply`, `.off`) for the built-in mesher, or a primitive spec
+        /// `box:LXxLYxLZ` (a box from the origin), `bar:LxWxH`, `sphere:R` or `cylinder:RxH`
+        /// (the round ones through the built-in mesher).
         input: String,
         /// Output tet mesh (any tet format by extension).
         #[arg(short, long)]
         output: PathBuf,
-        /// Cells across the longest side (each cell is cut into 6 tets).
-        #[arg(long, default_value_t = 20, conflicts_with = "cells")]
-        resolution: usize,
+        /// Cells across the longest side (primitives: 6 tets per cell, default 20; surfaces: BCC
+        /// lattice cells, default about 50k tets).
+        #[arg(long, conflicts_with_all = ["cells", "edge_length"])]
+        resolution: Option<usize>,
+        /// Target edge length for surfaces (the BCC lattice spacing).
+        #[arg(long)]
+        edge_length: Option<f64>,
+        /// Mesh the surface with `tetgen -pq1.414` (must be on the PATH) instead of the built-in
+        /// mesher.
+        #[arg(long)]
+        tetgen: bool,
         /// Exact cell counts along x, y, z, e.g. `40,8,40`.
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<usize>>,
@@ -74,7 +84,18 @@ fn main() -> ExitCode {
             output,
             resolution,
             cells,
-        } => mesh::run(&input, &output, resolution, cells.as_deref()),
+            edge_length,
+            tetgen,
+        } => mesh::run(
+            &input,
+            &output,
+            &mesh::MeshArgs {
+                resolution,
+                cells: cells.as_deref(),
+                edge_length,
+                tetgen,
+            },
+        ),
         Command::Info { mesh, json } => info::run(&mesh, json),
     };
     match result {

@@ -1,10 +1,15 @@
-//! `perifrac mesh`: tet meshes from built-in primitives.
+//! `perifrac mesh`: tet meshes from built-in primitives, or from a closed triangle surface
+//! (`.obj`, `.ply`, `.off`) with the built-in mesher or, on request, TetGen.
 
 use std::path::Path;
+use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 use perifrac_io::TetFormat;
-use perifrac_topology::primitives;
+use perifrac_topology::mesher::{
+    cylinder_surface, mesh_surface, sphere_surface, MesherOptions, MesherReport,
+};
+use perifrac_topology::{primitives, TetMesh};
 
 use crate::load::to_data;
 
@@ -19,13 +24,12 @@ pub struct Primitive {
 pub fn parse_primitive(spec: &str) -> Result<Primitive> {
     let Some((kind, dims)) = spec.split_once(':') else {
         bail!(
-            "`{spec}` is not a primitive spec; expected `box:LXxLYxLZ` or `bar:LxWxH` \
-             (meshing surface files is not built yet: run `tetgen -pq1.414 FILE.off` and \
-             `perifrac convert FILE.1.ele OUT.mesh`)"
+            "`{spec}` is neither an existing surface file (.obj, .ply, .off) nor a primitive \
+             spec; expected `box:LXxLYxLZ`, `bar:LxWxH`, `sphere:R` or `cylinder:RxH`"
         );
     };
     if kind != "box" && kind != "bar" {
-        bail!("unknown primitive `{kind}` in `{spec}`; known: box, bar");
+        bail!("unknown primitive `{kind}` in `{spec}`; known: box, bar, sphere, cylinder");
     }
     let parts: Vec<&str> = dims.split('x').collect();
     if parts.len() != 3 {
@@ -64,8 +68,250 @@ pub fn cell_counts(
     Ok(size.map(|s| ((s / h).round() as usize).max(1)))
 }
 
+/// How `perifrac mesh` was asked to size and build the mesh.
+#[derive(Debug, Clone, Default)]
+pub struct MeshArgs<'a> {
+    /// Cells across the longest side.
+    pub resolution: Option<usize>,
+    /// Exact cell counts (primitives only).
+    pub cells: Option<&'a [usize]>,
+    /// Target edge length (surfaces only).
+    pub edge_length: Option<f64>,
+    /// Use TetGen instead of the built-in mesher (surfaces only).
+    pub tetgen: bool,
+}
+
+/// Cells across the longest side of a primitive when none is given.
+const DEFAULT_PRIMITIVE_RESOLUTION: usize = 20;
+
+/// Meshes `input` (an existing surface file, or else a primitive spec) into `output`.
+pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
+    let path = Path::new(input);
+    if path.is_file() {
+        if args.cells.is_some() {
+            bail!("--cells applies to primitives only; use --resolution or --edge-length");
+        }
+        return if args.tetgen {
+            run_tetgen(path, output)
+        } else {
+            run_surface(path, output, args)
+        };
+    }
+    if let Some((vertices, faces)) = parse_round(input)? {
+        if args.cells.is_some() || args.tetgen {
+            bail!("--cells and --tetgen do not apply to `{input}`");
+        }
+        return mesh_and_write(&vertices, &faces, input, output, args);
+    }
+    if args.edge_length.is_some() || args.tetgen {
+        bail!("--edge-length and --tetgen apply to surface files, and `{input}` is not a file");
+    }
+    run_primitive(
+        input,
+        output,
+        args.resolution.unwrap_or(DEFAULT_PRIMITIVE_RESOLUTION),
+        args.cells,
+    )
+}
+
+/// Meshes a surface file with the built-in mesher and prints its report.
+fn run_surface(path: &Path, output: &Path, args: &MeshArgs) -> Result<()> {
+    TetFormat::from_path(output)?;
+    let surface = perifrac_io::read_surface(path)?;
+    let what = path.display().to_string();
+    mesh_and_write(&surface.vertices, &surface.faces, &what, output, args)
+}
+
+/// Runs the built-in mesher on a surface, prints its report and writes the mesh.
+fn mesh_and_write(
+    vertices: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    what: &str,
+    output: &Path,
+    args: &MeshArgs,
+) -> Result<()> {
+    let format = TetFormat::from_path(output)?;
+    let opts = MesherOptions {
+        edge_length: args.edge_length,
+        resolution: args.resolution,
+    };
+    let out =
+        mesh_surface(vertices, faces, &opts).with_context(|| format!("cannot mesh {what}"))?;
+    print_report(&out.report);
+    write_mesh(output, out.vertices, out.tets, format)
+}
+
+/// A triangle surface as vertex positions and faces.
+pub type SurfaceArrays = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// Facets of the round primitives' surfaces: rings of the sphere, sides of the cylinder.
+const ROUND_SEGMENTS: usize = 64;
+
+/// Parses `sphere:R` (about the origin) or `cylinder:RxH` (along z from the origin) into a
+/// closed surface; `None` for any other spec.
+pub fn parse_round(spec: &str) -> Result<Option<SurfaceArrays>> {
+    let Some((kind, dims)) = spec.split_once(':') else {
+        return Ok(None);
+    };
+    let expected = match kind {
+        "sphere" => 1,
+        "cylinder" => 2,
+        _ => return Ok(None),
+    };
+    let mut sizes = Vec::new();
+    for p in dims.split('x') {
+        let x = p
+            .trim()
+            .parse::<f64>()
+            .with_context(|| format!("`{spec}`: `{p}` is not a number"))?;
+        if !x.is_finite() || x <= 0.0 {
+            bail!("`{spec}`: sizes must be positive and finite, found {p}");
+        }
+        sizes.push(x);
+    }
+    if sizes.len() != expected {
+        bail!("`{spec}`: expected sphere:RADIUS or cylinder:RADIUSxHEIGHT");
+    }
+    Ok(Some(if kind == "sphere" {
+        sphere_surface(sizes[0], ROUND_SEGMENTS)
+    } else {
+        cylinder_surface(sizes[0], sizes[1], 2 * ROUND_SEGMENTS)
+    }))
+}
+
+/// Builds the topology (which checks orientation), writes the mesh and prints the summary.
+fn write_mesh(
+    output: &Path,
+    vertices: Vec<[f64; 3]>,
+    tets: Vec<[u32; 4]>,
+    format: TetFormat,
+) -> Result<()> {
+    let (mesh, build) = TetMesh::new(vertices, tets)?;
+    let q = mesh.quality();
+    let data = to_data(&mesh, vec![0; mesh.num_tets()], Vec::new());
+    perifrac_io::write_tet_mesh(output, &data, format)?;
+    eprintln!(
+        "wrote {} ({} vertices, {} tets, volume {:.6e}, min dihedral {:.2} deg, \
+         {} inverted tets fixed)",
+        output.display(),
+        mesh.num_vertices(),
+        mesh.num_tets(),
+        mesh.total_rest_volume(),
+        q.min_dihedral_deg,
+        build.inverted_fixed
+    );
+    eprintln!(
+        "dihedral histogram (10-degree bins): {:?}",
+        q.dihedral_histogram
+    );
+    Ok(())
+}
+
+/// Prints what the built-in mesher found and did.
+fn print_report(r: &MesherReport) {
+    let p = &r.problems;
+    eprintln!(
+        "surface: {} duplicate vertices merged, {} collapsed faces dropped, {} zero-area faces, \
+         {} open edges, {} non-manifold edges, {} flipped edges",
+        p.merged_vertices,
+        p.collapsed_faces,
+        p.zero_area_faces,
+        p.open_edges,
+        p.non_manifold_edges,
+        p.flipped_edges
+    );
+    if r.reoriented {
+        eprintln!("surface faces pointed inwards; reversed them");
+    }
+    if r.used_winding_on_open_surface {
+        eprintln!("surface is not watertight; inside decided by generalised winding number");
+    }
+    if r.fragments.dropped_pieces > 0 {
+        eprintln!(
+            "dropped {} loose fragments ({} tets) left by features thinner than the lattice",
+            r.fragments.dropped_pieces, r.fragments.dropped_tets
+        );
+    }
+    eprintln!(
+        "lattice spacing {:.4e}; snapped {} of {} boundary vertices onto the surface \
+         ({} part way, {} left for quality)",
+        r.edge_length, r.snap.snapped, r.snap.boundary_vertices, r.snap.partial, r.snap.kept
+    );
+    eprintln!(
+        "{} tets, volume {:.6e} vs surface {:.6e} ({:+.2}%), dihedral angles {:.2}..{:.2} deg",
+        r.tets,
+        r.mesh_volume,
+        r.surface_volume,
+        100.0 * (r.mesh_volume / r.surface_volume - 1.0),
+        r.min_dihedral_deg,
+        r.max_dihedral_deg
+    );
+}
+
+/// Meshes a surface with Debian's `tetgen -pq1.414` and imports its `.node`/`.ele`.
+fn run_tetgen(path: &Path, output: &Path) -> Result<()> {
+    let format = TetFormat::from_path(output)?;
+    let available = Command::new("tetgen")
+        .arg("-h")
+        .output()
+        .map(|_| true)
+        .unwrap_or(false);
+    if !available {
+        bail!("--tetgen: `tetgen` is not on the PATH (Debian: apt install tetgen); leave out --tetgen to use the built-in mesher");
+    }
+    let surface = perifrac_io::read_surface(path)?;
+    let dir = std::env::temp_dir().join(format!("perifrac-tetgen-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let result = (|| -> Result<()> {
+        let off = dir.join("surface.off");
+        write_off(&off, &surface.vertices, &surface.faces)?;
+        let run = Command::new("tetgen")
+            .arg("-pq1.414Q")
+            .arg(&off)
+            .output()
+            .context("running tetgen")?;
+        let ele = dir.join("surface.1.ele");
+        if !run.status.success() || !ele.exists() {
+            let said = String::from_utf8_lossy(&run.stdout) + String::from_utf8_lossy(&run.stderr);
+            let tail: Vec<&str> = said.lines().rev().take(4).collect();
+            bail!(
+                "tetgen could not mesh {} ({}); it said: {}. TetGen needs a closed, \
+                 non-self-intersecting solid; the built-in mesher (without --tetgen) copes with \
+                 small holes",
+                path.display(),
+                run.status,
+                tail.into_iter().rev().collect::<Vec<_>>().join(" / ")
+            );
+        }
+        let data = perifrac_io::read_tet_mesh(&ele)?;
+        eprintln!("tetgen -pq1.414 meshed {}", path.display());
+        write_mesh(output, data.vertices, data.tets, format)
+    })();
+    // Best effort: the temporary files are ours alone.
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+/// Writes an ASCII OFF surface for TetGen (Rust's `{}` for f64 round-trips exactly).
+fn write_off(path: &Path, vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut text = format!("OFF\n{} {} 0\n", vertices.len(), faces.len());
+    for p in vertices {
+        let _ = writeln!(text, "{} {} {}", p[0], p[1], p[2]);
+    }
+    for f in faces {
+        let _ = writeln!(text, "3 {} {} {}", f[0], f[1], f[2]);
+    }
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
 /// Builds the primitive and writes it to `output`.
-pub fn run(spec: &str, output: &Path, resolution: usize, cells: Option<&[usize]>) -> Result<()> {
+fn run_primitive(
+    spec: &str,
+    output: &Path,
+    resolution: usize,
+    cells: Option<&[usize]>,
+) -> Result<()> {
     let prim = parse_primitive(spec)?;
     let counts = cell_counts(prim.size, resolution, cells)?;
     let tets = 6u64 * counts.iter().map(|&c| c as u64).product::<u64>();
@@ -103,6 +349,15 @@ mod tests {
         assert!(parse_primitive("box:1xNaNx3").is_err());
         assert!(parse_primitive("ball:1x1x1").is_err());
         assert!(parse_primitive("bunny.off").is_err());
+    }
+
+    #[test]
+    fn parses_round_primitives() {
+        assert!(parse_round("sphere:0.5").unwrap().is_some());
+        assert!(parse_round("cylinder:0.5x2").unwrap().is_some());
+        assert!(parse_round("box:1x1x1").unwrap().is_none());
+        assert!(parse_round("sphere:1x2").is_err());
+        assert!(parse_round("cylinder:-1x2").is_err());
     }
 
     #[test]

@@ -14,6 +14,7 @@ mod crack;
 mod error;
 pub mod faces;
 mod mesh;
+pub mod mesher;
 mod pieces;
 pub mod primitives;
 mod quality;

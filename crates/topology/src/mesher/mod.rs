@@ -1,0 +1,27 @@
+//! Built-in tetrahedral mesher: a closed (or slightly open) triangle surface to a tet mesh.
+//!
+//! The surface is cleaned ([`surface_check`]), a body-centred cubic lattice ([`lattice`]) covers
+//! it, lattice tets are kept by generalised winding number ([`winding`]) at their corners and,
+//! where those disagree, their centroid, loose fragments are dropped ([`fragments`]), and the
+//! boundary of what is kept is snapped onto the
+//! surface under a dihedral-angle guard ([`snap`]).
+
+mod bvh;
+pub mod fragments;
+pub mod lattice;
+mod mesh_surface;
+pub mod shapes;
+pub mod snap;
+pub mod surface_check;
+pub mod winding;
+
+pub use fragments::FragmentReport;
+pub use mesh_surface::{
+    mesh_surface, MesherError, MesherOptions, MesherOutput, MesherReport, DEFAULT_TARGET_TETS,
+};
+pub use shapes::{cylinder_surface, sphere_surface};
+pub use snap::SnapReport;
+pub use surface_check::{
+    capped_volume, check_surface, enclosed_volume, CleanSurface, SurfaceProblems,
+};
+pub use winding::Winding;
