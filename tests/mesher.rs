@@ -19,24 +19,7 @@ const VOLUME_TOLERANCE: f64 = 0.02;
 
 /// Unit cube surface with outward faces.
 fn cube() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-    let v = (0..8)
-        .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64])
-        .collect();
-    let f = vec![
-        [0, 2, 1],
-        [1, 2, 3],
-        [4, 5, 6],
-        [5, 7, 6],
-        [0, 1, 4],
-        [1, 5, 4],
-        [2, 6, 3],
-        [3, 6, 7],
-        [0, 4, 2],
-        [2, 4, 6],
-        [1, 3, 5],
-        [3, 7, 5],
-    ];
-    (v, f)
+    perifrac_topology::mesher::cube_surface([0.0; 3], [1.0; 3])
 }
 
 /// Checks the guarantees and returns the mesh built from the output.

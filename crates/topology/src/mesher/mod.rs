@@ -19,7 +19,7 @@ pub use fragments::FragmentReport;
 pub use mesh_surface::{
     mesh_surface, MesherError, MesherOptions, MesherOutput, MesherReport, DEFAULT_TARGET_TETS,
 };
-pub use shapes::{cylinder_surface, sphere_surface};
+pub use shapes::{cube_surface, cylinder_surface, sphere_surface};
 pub use snap::SnapReport;
 pub use surface_check::{
     capped_volume, check_surface, enclosed_volume, CleanSurface, SurfaceProblems,

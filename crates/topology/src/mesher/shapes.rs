@@ -1,7 +1,30 @@
-//! Closed triangle surfaces of round primitives (sphere, cylinder), outward-oriented, for
-//! meshing through the same path as surface files.
+//! Closed triangle surfaces of primitives (box, sphere, cylinder), outward-oriented, for
+//! meshing through the same path as surface files and for tests.
 
 use std::f64::consts::PI;
+
+/// The surface of the axis-aligned box from `min` to `max` (m): 8 corners, 12 triangles.
+pub fn cube_surface(min: [f64; 3], max: [f64; 3]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    // Corner i has x from bit 0, y from bit 1, z from bit 2.
+    let v = (0..8)
+        .map(|i: usize| std::array::from_fn(|k| if (i >> k) & 1 == 1 { max[k] } else { min[k] }))
+        .collect();
+    let f = vec![
+        [0, 2, 1],
+        [1, 2, 3],
+        [4, 5, 6],
+        [5, 7, 6],
+        [0, 1, 4],
+        [1, 5, 4],
+        [2, 6, 3],
+        [3, 6, 7],
+        [0, 4, 2],
+        [2, 4, 6],
+        [1, 3, 5],
+        [3, 7, 5],
+    ];
+    (v, f)
+}
 
 /// A UV sphere of `radius` about the origin: `segments` rings from pole to pole and twice as
 /// many around (at least 3 and 6).
