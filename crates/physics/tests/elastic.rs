@@ -4,15 +4,11 @@
 mod support;
 
 use perifrac_physics::math::{add, mat_vec, norm, rotation, Vec3};
-use perifrac_physics::ForceModel;
 use perifrac_physics::{ChenModel, ChenOptions};
-use support::{affine, block, diff_all, elastic_block, interior, nonuniform, norm_all, steel};
-
-fn forces(m: &mut perifrac_physics::ChenModel, y: &[Vec3]) -> Vec<Vec3> {
-    let mut f = vec![[0.0; 3]; y.len()];
-    m.trial_forces(y, &mut f);
-    f
-}
+use support::{
+    affine, block, diff_all, elastic_block, forces, gradient_mismatch, interior, nonuniform,
+    norm_all, steel,
+};
 
 #[test]
 fn zero_force_at_rest() {
@@ -121,19 +117,7 @@ fn force_is_minus_the_gradient_of_the_energy() {
     let x = m.discretization().rest_positions().to_vec();
     let y = nonuniform(&x, 0.01, 0.03);
     let f = forces(&mut m, &y);
-    let h = 1e-7 * 0.01;
-    let mut worst: f64 = 0.0;
-    let fmax = f.iter().map(|v| norm(*v)).fold(0.0, f64::max);
-    for i in (0..x.len()).step_by(7) {
-        for d in 0..3 {
-            let mut yp = y.clone();
-            yp[i][d] += h;
-            let mut ym = y.clone();
-            ym[i][d] -= h;
-            let g = (m.elastic_energy(&yp) - m.elastic_energy(&ym)) / (2.0 * h);
-            worst = worst.max((f[i][d] + g).abs() / fmax);
-        }
-    }
+    let worst = gradient_mismatch(&mut m, &y, &f, 1e-7 * 0.01, 7);
     eprintln!("max |f + dE/dy| / max |f| = {worst:e}");
     assert!(worst < 1e-5);
 }
@@ -153,18 +137,7 @@ fn model_md_force_without_the_pressure_term_is_not_a_gradient() {
     let x = m.discretization().rest_positions().to_vec();
     let y = nonuniform(&x, 0.01, 0.03);
     let f = forces(&mut m, &y);
-    let fmax = f.iter().map(|v| norm(*v)).fold(0.0, f64::max);
-    let h = 1e-9;
-    let mut worst: f64 = 0.0;
-    for i in (0..x.len()).step_by(7) {
-        for d in 0..3 {
-            let (mut yp, mut ym) = (y.clone(), y.clone());
-            yp[i][d] += h;
-            ym[i][d] -= h;
-            let g = (m.elastic_energy(&yp) - m.elastic_energy(&ym)) / (2.0 * h);
-            worst = worst.max((f[i][d] + g).abs() / fmax);
-        }
-    }
+    let worst = gradient_mismatch(&mut m, &y, &f, 1e-9, 7);
     eprintln!("without the pressure term: max |f + dE/dy| / max |f| = {worst:e}");
     assert!(worst > 0.05);
 }

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use perifrac_physics::math::{add, mat_vec, norm, sub, Mat3, Vec3};
-use perifrac_physics::{ChenMaterial, ChenModel, Discretization, FamilyReport};
+use perifrac_physics::{ChenMaterial, ChenModel, Discretization, FamilyReport, ForceModel};
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
 
@@ -80,4 +80,28 @@ pub fn nonuniform(x: &[Vec3], amp: f64, l: f64) -> Vec<Vec3> {
             ]
         })
         .collect()
+}
+
+/// Forces at `y` without touching the model's state (no return map).
+pub fn forces(m: &mut ChenModel, y: &[Vec3]) -> Vec<Vec3> {
+    let mut f = vec![[0.0; 3]; y.len()];
+    m.trial_forces(y, &mut f);
+    f
+}
+
+/// Largest `|f + dE/dy|` over `max |f|`, with `dE/dy` by central differences of step `h` (m) on
+/// every `stride`-th particle, where `f` are the forces at `y`.
+pub fn gradient_mismatch(m: &mut ChenModel, y: &[Vec3], f: &[Vec3], h: f64, stride: usize) -> f64 {
+    let fmax = f.iter().map(|v| norm(*v)).fold(0.0, f64::max);
+    let mut worst: f64 = 0.0;
+    for i in (0..y.len()).step_by(stride) {
+        for d in 0..3 {
+            let (mut yp, mut ym) = (y.to_vec(), y.to_vec());
+            yp[i][d] += h;
+            ym[i][d] -= h;
+            let g = (m.elastic_energy(&yp) - m.elastic_energy(&ym)) / (2.0 * h);
+            worst = worst.max((f[i][d] + g).abs() / fmax);
+        }
+    }
+    worst
 }

@@ -4,6 +4,8 @@
 
 use hashbrown::HashMap;
 
+use crate::faces::FACE_CORNERS;
+
 /// Face-connected components holding less than this fraction of all tets are dropped.
 pub const MIN_FRAGMENT_FRACTION: f64 = 0.01;
 
@@ -32,15 +34,8 @@ pub fn drop_small_fragments(tets: &mut Vec<[u32; 4]>) -> FragmentReport {
     let mut parent: Vec<u32> = (0..tets.len() as u32).collect();
     let mut first: HashMap<[u32; 3], u32> = HashMap::with_capacity(2 * tets.len());
     for (ti, t) in tets.iter().enumerate() {
-        for skip in 0..4 {
-            let mut f = [0u32; 3];
-            let mut n = 0;
-            for (i, &v) in t.iter().enumerate() {
-                if i != skip {
-                    f[n] = v;
-                    n += 1;
-                }
-            }
+        for corners in FACE_CORNERS {
+            let mut f = corners.map(|c| t[c]);
             f.sort_unstable();
             if let Some(&other) = first.get(&f) {
                 let (a, b) = (find(&mut parent, ti as u32), find(&mut parent, other));

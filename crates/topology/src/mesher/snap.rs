@@ -9,7 +9,7 @@
 use hashbrown::HashMap;
 
 use super::bvh::TriangleBvh;
-use crate::faces::signed_volume;
+use crate::faces::{signed_volume, FACE_CORNERS};
 use crate::quality::dihedral_angles_deg;
 
 /// Smallest dihedral angle a snap may leave, in degrees.
@@ -35,15 +35,8 @@ pub struct SnapReport {
 pub fn boundary_vertices(tets: &[[u32; 4]], num_vertices: usize) -> Vec<bool> {
     let mut faces: HashMap<[u32; 3], u32> = HashMap::with_capacity(2 * tets.len());
     for t in tets {
-        for skip in 0..4 {
-            let mut f = [0u32; 3];
-            let mut n = 0;
-            for (i, &v) in t.iter().enumerate() {
-                if i != skip {
-                    f[n] = v;
-                    n += 1;
-                }
-            }
+        for corners in FACE_CORNERS {
+            let mut f = corners.map(|c| t[c]);
             f.sort_unstable();
             *faces.entry(f).or_insert(0) += 1;
         }
