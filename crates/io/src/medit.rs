@@ -88,12 +88,7 @@ pub(crate) fn parse(path: &Path, data: &[u8]) -> Result<TetMeshData, IoError> {
             }
             b"tetrahedra" => {
                 let n = t.usize("a tet count after \"Tetrahedra\"")?;
-                let limit = if vertices_seen {
-                    mesh.vertices.len()
-                } else {
-                    late_check.get_or_insert(keyword_line);
-                    u32::MAX as usize
-                };
+                let limit = index_limit(vertices_seen, &mesh, &mut late_check, keyword_line);
                 mesh.tets.reserve(t.capacity_hint(n, 10));
                 mesh.tet_labels.reserve(t.capacity_hint(n, 10));
                 for i in 0..n {
@@ -112,12 +107,7 @@ pub(crate) fn parse(path: &Path, data: &[u8]) -> Result<TetMeshData, IoError> {
             }
             b"triangles" => {
                 let n = t.usize("a triangle count after \"Triangles\"")?;
-                let limit = if vertices_seen {
-                    mesh.vertices.len()
-                } else {
-                    late_check.get_or_insert(keyword_line);
-                    u32::MAX as usize
-                };
+                let limit = index_limit(vertices_seen, &mesh, &mut late_check, keyword_line);
                 mesh.boundary_faces.reserve(t.capacity_hint(n, 8));
                 for i in 0..n {
                     let ctx = || format!("triangle {} of {n}", i + 1);
@@ -200,6 +190,22 @@ pub(crate) fn write(path: &Path, mesh: &TetMeshData) -> Result<(), IoError> {
         }
         writeln!(w, "\nEnd")
     })
+}
+
+/// Largest vertex index an element section may use: the vertex count once `Vertices` was read;
+/// otherwise anything, with the section's line kept so the indices are checked at the end.
+fn index_limit(
+    vertices_seen: bool,
+    mesh: &TetMeshData,
+    late_check: &mut Option<usize>,
+    keyword_line: usize,
+) -> usize {
+    if vertices_seen {
+        mesh.vertices.len()
+    } else {
+        late_check.get_or_insert(keyword_line);
+        u32::MAX as usize
+    }
 }
 
 #[cfg(test)]

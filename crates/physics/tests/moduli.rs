@@ -17,22 +17,33 @@ fn slope(u: &[f64], v: &[f64]) -> f64 {
     cov / var
 }
 
+/// Young's modulus (Pa) and density (kg/m^3) of the bars: steel-like.
+const YOUNG: f64 = 200e9;
+const RHO: f64 = 7800.0;
+
+/// A bar of `cells` cubes of side `h` (m) with horizon factor `k`: the model, its rest
+/// positions, its horizon (m) and its size (m).
+fn bar(
+    cells: [usize; 3],
+    h: f64,
+    k: f64,
+    nu: f64,
+    opts: ChenOptions,
+) -> (ChenModel, Vec<[f64; 3]>, f64, [f64; 3]) {
+    let size = cells.map(|c| c as f64 * h);
+    let (disc, _, _) = block(size, cells, k);
+    let x = disc.rest_positions().to_vec();
+    let delta = disc.horizon();
+    let mat = ChenMaterial::from_young_poisson(YOUNG, nu, RHO).unwrap();
+    let m = ChenModel::with_options(disc, &[mat], opts).unwrap();
+    (m, x, delta, size)
+}
+
 /// Measured (E / E_nominal, nu) of a bar `cells` (cube cells of 5 mm) with horizon factor `k`,
 /// both ends anchored (one fixed, one pulled to 0.1% strain), damped to rest. Strains are fitted
 /// over the middle third; the stress is the anchor reaction over the nominal cross-section.
 fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) {
-    let h = 0.02 / cells[1] as f64;
-    let size = [
-        cells[0] as f64 * h,
-        cells[1] as f64 * h,
-        cells[2] as f64 * h,
-    ];
-    let (disc, _, _) = block(size, cells, k);
-    let x = disc.rest_positions().to_vec();
-    let delta = disc.horizon();
-    let young = 200e9;
-    let mat: ChenMaterial = ChenMaterial::from_young_poisson(young, nu, 7800.0).unwrap();
-    let m = ChenModel::with_options(disc, &[mat], opts).unwrap();
+    let (m, x, delta, size) = bar(cells, 0.02 / cells[1] as f64, k, nu, opts);
     let len = size[0];
     // the ends: particles within one horizon of them, so no free family is cut by an anchor
     let left: Vec<u32> = (0..x.len() as u32)
@@ -41,7 +52,7 @@ fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) 
     let right: Vec<u32> = (0..x.len() as u32)
         .filter(|&i| x[i as usize][0] > len - delta)
         .collect();
-    let c = (young / 7800.0).sqrt();
+    let c = (YOUNG / RHO).sqrt();
     let omega1 = std::f64::consts::PI * c / len;
     let mut loads = Loads::new(x.len()).with_damping(2.0 * omega1).unwrap();
     loads.anchor(&left, [0.0; 3]).unwrap();
@@ -87,7 +98,7 @@ fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) 
         .map(|&i| s.forces()[i as usize][0])
         .sum::<f64>();
     let stress = -reaction / (size[1] * size[2]);
-    (stress / exx / young, -eyy / exx)
+    (stress / exx / YOUNG, -eyy / exx)
 }
 
 const MODEL_MD: ChenOptions = ChenOptions {
@@ -157,18 +168,8 @@ fn moduli_convergence_study() {
 /// half-peak arrival times at 30% and 70% of its length, over sqrt(E / rho).
 fn pulse_speed(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> f64 {
     let h = 0.005;
-    let size = [
-        cells[0] as f64 * h,
-        cells[1] as f64 * h,
-        cells[2] as f64 * h,
-    ];
-    let (disc, _, _) = block(size, cells, k);
-    let x = disc.rest_positions().to_vec();
-    let delta = disc.horizon();
-    let young = 200e9;
-    let mat = ChenMaterial::from_young_poisson(young, nu, 7800.0).unwrap();
-    let c = (young / 7800.0).sqrt();
-    let m = ChenModel::with_options(disc, &[mat], opts).unwrap();
+    let (m, x, delta, size) = bar(cells, h, k, nu, opts);
+    let c = (YOUNG / RHO).sqrt();
     let cfg = ExplicitConfig {
         dt: TimeStep::Auto { safety: 0.8 },
         guard_fraction: 0.5,
