@@ -45,7 +45,7 @@ pub mod stable_step;
 pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
-pub use integrate::{Explicit, ExplicitConfig, TimeStep};
+pub use integrate::{Explicit, ExplicitConfig, External, TimeStep};
 pub use loads::Loads;
 pub use material::{ChenMaterial, ChenModel, ChenOptions, ForceModel, FractureParams, YieldParams};
 pub use math::{Real, Vec3};

@@ -49,6 +49,20 @@ impl Default for ExplicitConfig {
     }
 }
 
+/// What an external-force callback of [`Explicit::step_with`] sees.
+pub struct External<'a> {
+    /// The step (s).
+    pub dt: f64,
+    /// Positions at the end of the step (m).
+    pub positions: &'a [Vec3],
+    /// Half-step velocities (m/s).
+    pub velocities: &'a [Vec3],
+    /// Particle masses (kg).
+    pub masses: &'a [f64],
+    /// Internal forces at `positions` (N); add external forces here.
+    pub forces: &'a mut [Vec3],
+}
+
 /// The explicit solver: owns the model, the particle state and every per-step buffer.
 pub struct Explicit<M: ForceModel> {
     model: M,
@@ -131,11 +145,30 @@ impl<M: ForceModel> Explicit<M> {
     /// Advances one step of `dt`; returns the bonds broken in it as `(i, j)`, `i < j`. After an
     /// error the state is that of the failed step (restore a checkpoint to go on).
     pub fn step(&mut self) -> Result<&[(u32, u32)], PhysicsError> {
+        self.step_with(|_| {})
+    }
+
+    /// Advances one step like [`Explicit::step`], with external forces: after the drift to
+    /// `y(t + dt)` and the internal forces there, `external` may add forces (N) into
+    /// [`External::forces`] (contact, say); they act in the closing half kick and the opening
+    /// half kick of the next step, as internal forces do. Velocities seen are the half-step
+    /// ones. The closure runs once per step, on the calling thread.
+    pub fn step_with<F>(&mut self, mut external: F) -> Result<&[(u32, u32)], PhysicsError>
+    where
+        F: FnMut(External<'_>),
+    {
         self.kick();
         self.drift()?;
         self.broken.clear();
         self.model.break_bonds(&self.y, &mut self.broken);
         self.model.update_forces(&self.y, &mut self.f);
+        external(External {
+            dt: self.dt,
+            positions: &self.y,
+            velocities: &self.v,
+            masses: self.model.masses(),
+            forces: &mut self.f,
+        });
         self.kick();
         self.time += self.dt;
         self.steps += 1;

@@ -2,4 +2,4 @@
 
 pub mod explicit;
 
-pub use explicit::{Explicit, ExplicitConfig, TimeStep};
+pub use explicit::{Explicit, ExplicitConfig, External, TimeStep};

@@ -1,0 +1,201 @@
+//! Setup checks: validation, overlap detection, ball inside a closed surface, coincident centres.
+
+use perifrac_contact::{
+    BallDesc, BallMotion, Colliders, ContactError, ContactParams, GroundDesc, Vec3,
+};
+
+fn p() -> ContactParams {
+    ContactParams::from_material(1e7, 0.01, 1.0, 0.1, 0.3)
+}
+
+fn ground(z: f64) -> GroundDesc {
+    GroundDesc {
+        point: [0.0, 0.0, z],
+        normal: [0.0, 0.0, 1.0],
+        params: p(),
+    }
+}
+
+fn ball(center: Vec3, radius: f64, motion: BallMotion) -> BallDesc {
+    BallDesc {
+        center,
+        radius,
+        motion,
+        params: p(),
+    }
+}
+
+const STILL: BallMotion = BallMotion::Kinematic { velocity: [0.0; 3] };
+
+#[test]
+fn validation_names_the_collider_and_value() {
+    let e = Colliders::new(vec![], vec![ball([0.0; 3], -1.0, STILL)], [0.0; 3]).unwrap_err();
+    assert_eq!(e.to_string(), "ball 0: radius must be > 0, got -1");
+    let heavy = BallMotion::Dynamic {
+        mass: 0.0,
+        velocity: [0.0; 3],
+    };
+    let e = Colliders::new(vec![], vec![ball([0.0, 0.0, 1.0], 0.1, heavy)], [0.0; 3]);
+    assert!(
+        matches!(e, Err(ContactError::NotPositive { what: "mass", .. })),
+        "{e:?}"
+    );
+    let mut g = ground(0.0);
+    g.normal = [0.0; 3];
+    let e = Colliders::new(vec![ground(0.0), g], vec![], [0.0; 3]).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("ground 1: normal must be nonzero"),
+        "{e}"
+    );
+    let mut g = ground(0.0);
+    g.params.damping_ratio = -0.5;
+    let e = Colliders::new(vec![g], vec![], [0.0; 3]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "ground 0: damping_ratio must be >= 0, got -0.5"
+    );
+    let e = Colliders::new(vec![], vec![], [0.0, f64::NAN, 0.0]).unwrap_err();
+    assert!(matches!(e, ContactError::NonFinite { .. }), "{e:?}");
+    // A dynamic ball with its centre below the ground.
+    let sunk = BallMotion::Dynamic {
+        mass: 1.0,
+        velocity: [0.0; 3],
+    };
+    let e = Colliders::new(
+        vec![ground(0.0)],
+        vec![ball([0.0, 0.0, -0.02], 0.1, sunk)],
+        [0.0; 3],
+    )
+    .unwrap_err();
+    assert_eq!(
+        e,
+        ContactError::BallInGround {
+            ball: "ball 0".into(),
+            ground: "ground 0".into(),
+            depth: 0.02
+        }
+    );
+}
+
+#[test]
+fn ground_normal_is_normalised_and_state_is_reported() {
+    let mut g = ground(1.0);
+    g.normal = [0.0, 3.0, 4.0];
+    let col = Colliders::new(vec![g], vec![ball([0.0, 5.0, 5.0], 0.5, STILL)], [0.0; 3]).unwrap();
+    let gs: Vec<_> = col.grounds().collect();
+    assert_eq!(gs[0].normal, [0.0, 0.6, 0.8]);
+    assert_eq!(gs[0].point, [0.0, 0.0, 1.0]);
+    let b = col.ball(0);
+    assert_eq!((b.center, b.radius, b.mass), ([0.0, 5.0, 5.0], 0.5, None));
+    assert!(!col.is_empty());
+    assert!(Colliders::new(vec![], vec![], [0.0; 3]).unwrap().is_empty());
+}
+
+#[test]
+fn check_clear_catches_particles_inside() {
+    let col = Colliders::new(
+        vec![ground(0.0), ground(-1.0)],
+        vec![ball([0.0, 0.0, 1.0], 0.5, STILL)],
+        [0.0; 3],
+    )
+    .unwrap();
+    // Touching the surfaces (centre on the plane / on the sphere) is allowed.
+    col.check_clear(&[[0.0, 0.0, 0.0], [0.0, 0.0, 1.5], [3.0, 0.0, 0.2]])
+        .unwrap();
+    let e = col
+        .check_clear(&[[3.0, 0.0, 0.2], [0.1, 0.0, 1.0], [0.0, 0.0, -0.25]])
+        .unwrap_err();
+    assert_eq!(
+        e,
+        ContactError::Overlap {
+            collider: "ball 0".into(),
+            particle: 1,
+            depth: 0.4
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "particle 1 starts inside ball 0 (its centre is 0.4 m inside)"
+    );
+    let e = col
+        .check_clear(&[[3.0, 0.0, 0.2], [0.0, 0.0, -0.25]])
+        .unwrap_err();
+    assert_eq!(
+        e,
+        ContactError::Overlap {
+            collider: "ground 0".into(),
+            particle: 1,
+            depth: 0.25
+        }
+    );
+    // The exact ball centre (where parry's projection is undefined) is caught too.
+    let e = col.check_clear(&[[0.0, 0.0, 1.0]]).unwrap_err();
+    assert!(
+        matches!(e, ContactError::Overlap { depth, .. } if depth == 0.5),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn coincident_centre_gives_a_finite_force_along_z() {
+    let mut col =
+        Colliders::new(vec![], vec![ball([1.0, 2.0, 3.0], 0.1, STILL)], [0.0; 3]).unwrap();
+    let mut f = vec![[0.0; 3]];
+    let stats = col.step(
+        1e-5,
+        &[[1.0, 2.0, 3.0]],
+        &[[0.5, 0.0, 0.0]],
+        &[1e-3],
+        &[0.01],
+        &mut f,
+    );
+    assert_eq!(stats.contacts, 1);
+    assert_eq!(stats.max_penetration, 0.11);
+    assert!(f[0].iter().all(|x| x.is_finite()), "{f:?}");
+    // Normal along +z: k d = 1e5 * 0.11 minus damping of zero normal velocity.
+    assert!((f[0][2] - 1e5 * 0.11).abs() < 1e-6, "{f:?}");
+    // Friction against the +x sliding, capped by m |v_t| / dt = 1e-3 * 0.5 / 1e-5 = 50 N.
+    assert!((f[0][0] + 50.0).abs() < 1e-9, "{f:?}");
+    assert_eq!(col.ball(0).reaction, [-f[0][0], -f[0][1], -f[0][2]]);
+}
+
+/// Unit cube [0, 1]^3, triangles counter-clockwise seen from outside.
+fn cube() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let v: Vec<Vec3> = (0..8)
+        .map(|i| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64])
+        .collect();
+    let quads = [
+        [0, 2, 3, 1], // z = 0, normal -z
+        [4, 5, 7, 6], // z = 1, +z
+        [0, 1, 5, 4], // y = 0, -y
+        [2, 6, 7, 3], // y = 1, +y
+        [0, 4, 6, 2], // x = 0, -x
+        [1, 3, 7, 5], // x = 1, +x
+    ];
+    let t = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    (v, t)
+}
+
+#[test]
+fn balls_inside_a_closed_cube_surface() {
+    let (v, t) = cube();
+    let balls = vec![
+        ball([0.5, 0.5, 0.5], 0.1, STILL),    // inside, centre
+        ball([1.5, 0.5, 0.5], 0.1, STILL),    // outside, beside a face
+        ball([0.99, 0.01, 0.5], 2.0, STILL),  // inside, near an edge (radius does not matter)
+        ball([1.01, 1.01, 1.01], 0.1, STILL), // outside, beyond a corner
+        ball([0.5, 0.5, -0.01], 0.1, STILL),  // just below the bottom face
+    ];
+    let col = Colliders::new(vec![], balls, [0.0; 3]).unwrap();
+    assert_eq!(col.balls_inside_surface(&v, &t).unwrap(), vec![0, 2]);
+    let e = col.balls_inside_surface(&v, &[[0, 1, 8]]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "surface: triangle 0 uses vertex 8, but there are only 8 vertices"
+    );
+    assert!(col.balls_inside_surface(&v, &[]).is_err());
+}
