@@ -63,9 +63,7 @@ pub fn cell_counts(
     if resolution == 0 {
         bail!("--resolution must be at least 1");
     }
-    let longest = size.iter().cloned().fold(0.0, f64::max);
-    let h = longest / resolution as f64;
-    Ok(size.map(|s| ((s / h).round() as usize).max(1)))
+    Ok(primitives::cells_for_resolution(size, resolution))
 }
 
 /// How `perifrac mesh` was asked to size and build the mesh.

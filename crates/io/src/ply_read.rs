@@ -103,7 +103,8 @@ fn format_error(path: &Path, message: String) -> IoError {
     }
 }
 
-fn scalar_f64(p: &Property) -> Option<f64> {
+/// A numeric PLY scalar as f64 (`None` for lists).
+pub(crate) fn scalar_f64(p: &Property) -> Option<f64> {
     match *p {
         Property::Float(v) => Some(f64::from(v)),
         Property::Double(v) => Some(v),

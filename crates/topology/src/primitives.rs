@@ -46,6 +46,14 @@ pub fn box_data(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> (Vec<[f64; 3
     (vertices, tets)
 }
 
+/// Cell counts for a box of extent `size` (m) with `resolution` cells across its longest side
+/// and the other sides in proportion (at least one cell each); `resolution` 0 counts as 1.
+pub fn cells_for_resolution(size: [f64; 3], resolution: usize) -> [usize; 3] {
+    let longest = size.iter().cloned().fold(0.0, f64::max);
+    let h = longest / resolution.max(1) as f64;
+    size.map(|s| ((s / h).round() as usize).max(1))
+}
+
 /// Like [`box_mesh`], but returns an error for an empty or non-finite extent.
 pub fn try_box_mesh(
     min: [f64; 3],
