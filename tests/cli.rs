@@ -2,37 +2,9 @@
 
 mod common;
 
+use common::{fails, ok};
+
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn perifrac(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_perifrac"))
-        .args(args)
-        .output()
-        .expect("the perifrac binary runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = perifrac(args);
-    assert!(
-        out.status.success(),
-        "perifrac {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs a command that must fail and returns its stderr.
-fn fails(args: &[&str]) -> String {
-    let out = perifrac(args);
-    let err = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!out.status.success(), "perifrac {args:?} should fail");
-    assert!(
-        !err.contains("panicked"),
-        "perifrac {args:?} panicked:\n{err}"
-    );
-    err
-}
 
 fn info_json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&ok(&["info", "--json", path.to_str().unwrap()])).unwrap()

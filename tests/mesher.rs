@@ -4,8 +4,8 @@
 
 mod common;
 
+use common::perifrac;
 use std::path::Path;
-use std::process::Command;
 
 use perifrac_io::TetFormat;
 use perifrac_topology::mesher::{mesh_surface, MesherError, MesherOptions, MesherOutput};
@@ -187,13 +187,6 @@ fn generated_mesh_round_trips_through_every_format() {
         let rel = (m.total_rest_volume() / out.report.mesh_volume - 1.0).abs();
         assert!(rel < 1e-9, "{name}: {rel}");
     }
-}
-
-fn perifrac(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_perifrac"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 fn s(p: &Path) -> &str {

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
+use std::process::{Command, Output};
 
 /// `../shared/data/meshes` beside the checkout (CI clones the repo with `shared/` beside it).
 pub fn shared_meshes() -> PathBuf {
@@ -30,4 +31,35 @@ pub fn have_program(program: &str) -> bool {
         .output()
         .map(|o| o.status.success())
         .unwrap_or(false)
+}
+
+/// Runs the `perifrac` binary built for these tests.
+pub fn perifrac(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_perifrac"))
+        .args(args)
+        .output()
+        .expect("the perifrac binary runs")
+}
+
+/// Runs `perifrac` expecting success; returns stdout (stderr is shown on failure).
+pub fn ok(args: &[&str]) -> String {
+    let out = perifrac(args);
+    assert!(
+        out.status.success(),
+        "perifrac {args:?} failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Runs `perifrac` expecting a failure that is reported, not a panic; returns stderr.
+pub fn fails(args: &[&str]) -> String {
+    let out = perifrac(args);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "perifrac {args:?} should fail");
+    assert!(
+        !err.contains("panicked"),
+        "perifrac {args:?} panicked:\n{err}"
+    );
+    err
 }

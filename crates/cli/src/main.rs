@@ -7,6 +7,8 @@ mod convert;
 mod info;
 mod load;
 mod mesh;
+mod render;
+mod run;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -61,6 +63,10 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<usize>>,
     },
+    /// Simulate a scene file and write crack-surface frames (PLY, POV-Ray) into a directory.
+    Run(run::RunArgs),
+    /// Write a POV-Ray scene per frame of a run directory, and PNGs when povray is installed.
+    Render(render::RenderArgs),
     /// Summarise a tet mesh: counts, volume, edge length, quality, pieces, problems.
     Info {
         /// Tet mesh file.
@@ -97,12 +103,28 @@ fn main() -> ExitCode {
             },
         ),
         Command::Info { mesh, json } => info::run(&mesh, json),
+        Command::Run(args) => run::run(&args),
+        Command::Render(args) => render::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", message(&err));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, each cause once: library errors often quote their
+/// source in their own message, and `{:#}` would repeat it.
+fn message(err: &anyhow::Error) -> String {
+    let mut text = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
 }

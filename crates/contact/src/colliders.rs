@@ -191,11 +191,12 @@ impl Colliders {
                 for (j, g) in gs.iter().enumerate() {
                     // Signed distance of the centre to the plane (negative inside).
                     let dist = g.shape.distance_to_point(&g.pose, pose.translation, false);
-                    if dist < 0.0 {
+                    let depth = b.radius - dist;
+                    if depth > overlap_tolerance(b.radius) {
                         return Err(ContactError::BallInGround {
                             ball: name,
                             ground: format!("ground {j}"),
-                            depth: -dist,
+                            depth,
                         });
                     }
                 }
@@ -226,22 +227,32 @@ impl Colliders {
         self.grounds.is_empty() && self.balls.is_empty()
     }
 
-    /// Setup check: `Err(ContactError::Overlap)` naming the first particle (lowest index; grounds
-    /// before balls) whose centre `y` (m) is strictly inside a collider (below a ground plane,
-    /// inside a ball), with its depth. Uses parry3d point queries; `O(particles x colliders)`.
-    pub fn check_clear(&self, y: &[Vec3]) -> Result<(), ContactError> {
+    /// Setup check: `Err(ContactError::Overlap)` naming the first particle (lowest index;
+    /// grounds before balls) whose contact sphere (centre `y`, radius `radius`, m) starts inside
+    /// a collider, with the depth of the overlap. Touching is allowed (an overlap below a
+    /// billionth of the radii counts as touching). A sphere that starts inside would be shot out
+    /// by the penalty force stored in its overlap. Uses parry3d point queries;
+    /// `O(particles x colliders)`.
+    ///
+    /// Panics when `y` and `radius` differ in length.
+    #[track_caller]
+    pub fn check_clear(&self, y: &[Vec3], radius: &[f64]) -> Result<(), ContactError> {
+        assert_eq!(y.len(), radius.len(), "one radius per particle");
         let hit = (0..y.len()).into_par_iter().find_map_first(|i| {
             let p = to_parry(y[i]);
+            let r = radius[i];
             for (j, g) in self.grounds.iter().enumerate() {
-                let dist = g.shape.distance_to_point(&g.pose, p, false);
-                if dist < 0.0 {
-                    return Some((format!("ground {j}"), i, -dist));
+                let depth = r - g.shape.distance_to_point(&g.pose, p, false);
+                if depth > overlap_tolerance(r) {
+                    return Some((format!("ground {j}"), i, depth));
                 }
             }
             for (j, b) in self.balls.iter().enumerate() {
+                // Signed: negative inside the ball, down to -radius at its centre.
                 let dist = b.shape.distance_to_point(&b.pose, p, false);
-                if dist < 0.0 {
-                    return Some((format!("ball {j}"), i, -dist));
+                let depth = r - dist;
+                if depth > overlap_tolerance(r + b.shape.radius) {
+                    return Some((format!("ball {j}"), i, depth));
                 }
             }
             None
@@ -379,6 +390,12 @@ impl Colliders {
         let m = b.mass?;
         Some(ball_ground_coeffs(self.reference_mass, m, &self.grounds[ground]).k)
     }
+}
+
+/// Overlap (m) below which two surfaces of size `scale` (m) count as touching: rounding of the
+/// positions a scene computes must not make a resting object an error.
+fn overlap_tolerance(scale: f64) -> f64 {
+    1e-9 * scale
 }
 
 /// Ball-ground coefficients for a dynamic ball of mass `m` (kg) on ground `g`; see

@@ -44,25 +44,28 @@ pub enum ContactError {
         /// The normal as given.
         normal: [f64; 3],
     },
-    /// A particle centre lies inside a collider at the start (below a ground plane or inside a
-    /// ball); `depth` (m) is how far inside.
-    #[error("particle {particle} starts inside {collider} (its centre is {depth} m inside)")]
+    /// A particle's contact sphere starts inside a collider (below a ground plane or inside a
+    /// ball); `depth` (m) is how far it reaches in.
+    #[error(
+        "particle {particle} starts {depth:.3e} m inside {collider} (its contact sphere); \
+         move them at least that far apart"
+    )]
     Overlap {
         /// The collider.
         collider: String,
         /// Particle index.
         particle: usize,
-        /// Depth of the particle centre inside the collider (m, >= 0).
+        /// How far the contact sphere reaches into the collider (m, > 0).
         depth: f64,
     },
-    /// A dynamic ball's centre starts below a ground plane.
-    #[error("{ball} starts with its centre {depth} m below {ground}")]
+    /// A dynamic ball starts reaching into a ground plane.
+    #[error("{ball} starts {depth:.3e} m inside {ground}; lift it at least that far")]
     BallInGround {
         /// The ball, e.g. `"ball 0"`.
         ball: String,
         /// The ground, e.g. `"ground 1"`.
         ground: String,
-        /// Depth of the ball centre below the plane (m, >= 0).
+        /// How far the ball reaches below the plane (m, > 0).
         depth: f64,
     },
     /// A closed surface given to [`crate::Colliders::balls_inside_surface`] is unusable.

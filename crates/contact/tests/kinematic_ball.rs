@@ -23,7 +23,7 @@ fn kinematic_ball_pushes_a_row_of_particles() {
         .map(|i| [0.05 * i as f64, 0.004 * i as f64, 0.0])
         .collect();
     let mut w = World::new(y, vec![[0.0; 3]; n], vec![M; n], vec![R; n], [0.0; 3]);
-    col.check_clear(&w.y).unwrap();
+    col.check_clear(&w.y, &vec![R; n]).unwrap();
     let mut reaction_x = 0.0;
     // 0.6 s: the ball travels 0.6 m, past the whole row (0.2 m long) and then some.
     let steps = 60_000;

@@ -57,7 +57,7 @@ fn validation_names_the_collider_and_value() {
     );
     let e = Colliders::new(vec![], vec![], [0.0, f64::NAN, 0.0]).unwrap_err();
     assert!(matches!(e, ContactError::NonFinite { .. }), "{e:?}");
-    // A dynamic ball with its centre below the ground.
+    // A dynamic ball reaching 0.12 m into the ground (its centre 0.02 m below it).
     let sunk = BallMotion::Dynamic {
         mass: 1.0,
         velocity: [0.0; 3],
@@ -73,9 +73,16 @@ fn validation_names_the_collider_and_value() {
         ContactError::BallInGround {
             ball: "ball 0".into(),
             ground: "ground 0".into(),
-            depth: 0.02
+            depth: 0.12000000000000001
         }
     );
+    // Touching the ground is fine.
+    Colliders::new(
+        vec![ground(0.0)],
+        vec![ball([0.0, 0.0, 0.1], 0.1, sunk)],
+        [0.0; 3],
+    )
+    .unwrap();
 }
 
 #[test]
@@ -93,44 +100,48 @@ fn ground_normal_is_normalised_and_state_is_reported() {
 }
 
 #[test]
-fn check_clear_catches_particles_inside() {
+fn check_clear_catches_contact_spheres_inside() {
     let col = Colliders::new(
         vec![ground(0.0), ground(-1.0)],
         vec![ball([0.0, 0.0, 1.0], 0.5, STILL)],
         [0.0; 3],
     )
     .unwrap();
-    // Touching the surfaces (centre on the plane / on the sphere) is allowed.
-    col.check_clear(&[[0.0, 0.0, 0.0], [0.0, 0.0, 1.5], [3.0, 0.0, 0.2]])
+    let r = [0.1; 3];
+    // Touching the surfaces (sphere tangent to the plane / to the ball) is allowed.
+    col.check_clear(&[[0.0, 0.0, 0.1], [0.0, 0.0, 1.6], [3.0, 0.0, 0.2]], &r)
         .unwrap();
     let e = col
-        .check_clear(&[[3.0, 0.0, 0.2], [0.1, 0.0, 1.0], [0.0, 0.0, -0.25]])
+        .check_clear(&[[3.0, 0.0, 0.2], [0.1, 0.0, 1.0], [0.0, 0.0, -0.25]], &r)
         .unwrap_err();
-    assert_eq!(
-        e,
+    // Particle 1: its centre 0.4 m inside the ball, its sphere 0.1 m further.
+    match &e {
         ContactError::Overlap {
-            collider: "ball 0".into(),
-            particle: 1,
-            depth: 0.4
+            collider,
+            particle,
+            depth,
+        } => {
+            assert_eq!((collider.as_str(), *particle), ("ball 0", 1));
+            assert!((depth - 0.5).abs() < 1e-12, "{depth}");
         }
-    );
+        other => panic!("{other:?}"),
+    }
     assert_eq!(
         e.to_string(),
-        "particle 1 starts inside ball 0 (its centre is 0.4 m inside)"
+        "particle 1 starts 5.000e-1 m inside ball 0 (its contact sphere); move them at least \
+         that far apart"
     );
+    // A sphere whose centre is above the ground but which reaches 0.05 m below it.
     let e = col
-        .check_clear(&[[3.0, 0.0, 0.2], [0.0, 0.0, -0.25]])
+        .check_clear(&[[3.0, 0.0, 0.2], [0.0, 0.0, 0.05]], &r[..2])
         .unwrap_err();
-    assert_eq!(
-        e,
-        ContactError::Overlap {
-            collider: "ground 0".into(),
-            particle: 1,
-            depth: 0.25
-        }
+    assert!(
+        matches!(&e, ContactError::Overlap { collider, particle: 1, depth }
+            if collider == "ground 0" && (depth - 0.05).abs() < 1e-12),
+        "{e:?}"
     );
     // The exact ball centre (where parry's projection is undefined) is caught too.
-    let e = col.check_clear(&[[0.0, 0.0, 1.0]]).unwrap_err();
+    let e = col.check_clear(&[[0.0, 0.0, 1.0]], &[0.0]).unwrap_err();
     assert!(
         matches!(e, ContactError::Overlap { depth, .. } if depth == 0.5),
         "{e:?}"

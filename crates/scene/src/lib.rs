@@ -1,1 +1,35 @@
-//! Scene files and the simulation driver (issue 5; not built yet).
+//! Scene files and the simulation driver of perifrac.
+//!
+//! A scene (TOML, [`schema`]) names the object (a built-in primitive or a mesh file), materials
+//! by region, the horizon, the time step (`"auto"` allowed), the duration, colliders (ground
+//! planes and balls), anchors, initial velocities, initial cracks and the frame output.
+//! [`Scene::load`] parses it with line and column in every error; [`Setup::new`] validates it and
+//! builds the mesh, the peridynamic model, the colliders and the solver without writing
+//! anything; [`run`] steps the [`Driver`] and writes frames into a run directory (layout in
+//! [`output`]), atomically, reporting progress to an [`Observer`].
+//!
+//! ```no_run
+//! use perifrac_scene::{run, Scene, Setup, Silent};
+//! let scene = Scene::load("data/scenes/wall.toml".as_ref())?;
+//! let setup = Setup::new(&scene, Some(4))?; // 4 frames after the initial one
+//! let summary = run(setup, "out/wall".as_ref(), &mut Silent)?;
+//! println!("{} fragments", summary.fragments);
+//! # Ok::<(), perifrac_scene::SceneError>(())
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod driver;
+pub mod error;
+pub mod load;
+pub mod output;
+pub mod run;
+pub mod schema;
+pub mod setup;
+
+pub use driver::{Driver, StageTimes, StepReport};
+pub use error::SceneError;
+pub use load::Scene;
+pub use output::{check_output_dir, FrameWriter, RunManifest, RUN_FORMAT};
+pub use run::{run, Observer, Progress, Silent, Summary};
+pub use setup::{OutputOptions, Setup, SetupInfo};

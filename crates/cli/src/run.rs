@@ -1,0 +1,172 @@
+//! `perifrac run SCENE -o DIR`: load and validate a scene, then simulate it with a progress bar
+//! and write frames into DIR.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use perifrac_scene::{check_output_dir, Observer, Progress, Scene, Setup};
+
+/// Arguments of `perifrac run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// Scene file (TOML); see data/scenes/ for examples.
+    pub scene: PathBuf,
+    /// Output directory for frames and run.json (must be empty unless --force).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Overwrite the run files in a non-empty output directory.
+    #[arg(long)]
+    pub force: bool,
+    /// Frames after the initial one (overrides the scene's output.frames).
+    #[arg(long)]
+    pub frames: Option<usize>,
+    /// Worker threads (default: all cores). Results are identical for the same count.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bar, only the summary.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// Runs a scene.
+pub fn run(args: &RunArgs) -> Result<()> {
+    if let Some(t) = args.threads {
+        anyhow::ensure!(t >= 1, "--threads must be at least 1");
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("cannot set up the worker threads")?;
+    }
+    if args.frames == Some(0) {
+        anyhow::bail!("--frames must be at least 1");
+    }
+    check_output_dir(&args.output, args.force)?;
+    let started = Instant::now();
+    let scene = Scene::load(&args.scene)?;
+    let setup = Setup::new(&scene, args.frames)?;
+    let info = setup.info.clone();
+    let frames = setup.frames;
+    eprintln!(
+        "{}: {} particles, {} bonds, horizon {:.3e} m, dt {:.3e} s (stable limit {:.3e} s{}), \
+         {} frames of {} steps, setup {:.2} s",
+        args.scene.display(),
+        info.particles,
+        info.bonds,
+        info.horizon,
+        info.dt,
+        info.dt_limit,
+        if info.travel_limit.is_finite() {
+            format!(", contact travel limit {:.3e} s", info.travel_limit)
+        } else {
+            String::new()
+        },
+        frames,
+        setup.steps_per_frame,
+        started.elapsed().as_secs_f64()
+    );
+    let interactive = std::io::stderr().is_terminal() && !args.quiet;
+    let mut bar = Bar::new(interactive);
+    let t0 = Instant::now();
+    let result = perifrac_scene::run(setup, &args.output, &mut bar);
+    bar.finish();
+    let wall = t0.elapsed().as_secs_f64();
+    let summary = result.with_context(|| {
+        format!(
+            "run of {} stopped; frames written so far are in {}",
+            args.scene.display(),
+            args.output.display()
+        )
+    })?;
+    let t = summary.stage_times;
+    let share =
+        |d: std::time::Duration| 100.0 * d.as_secs_f64() / t.total().as_secs_f64().max(1e-12);
+    eprintln!(
+        "done in {wall:.2} s: {} steps ({:.0} steps/s), t = {:.4e} s, {} bonds broken, \
+         {} fragments, {} crack triangles",
+        summary.steps,
+        summary.steps as f64 / wall.max(1e-9),
+        summary.time,
+        summary.broken_bonds,
+        summary.fragments,
+        summary.crack_triangles,
+    );
+    eprintln!(
+        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J{}",
+        summary.kinetic_energy,
+        summary.elastic_energy,
+        if summary.ball_kinetic_energy > 0.0 {
+            format!(", balls {:.4e} J", summary.ball_kinetic_energy)
+        } else {
+            String::new()
+        }
+    );
+    eprintln!(
+        "time per stage: physics {:.0}%, topology {:.0}%, advection {:.0}%, output {:.0}%",
+        share(t.physics),
+        share(t.topology),
+        share(t.advect),
+        share(t.output)
+    );
+    eprintln!(
+        "{} frames in {}",
+        summary.frames_written,
+        args.output.join("frames").display()
+    );
+    Ok(())
+}
+
+/// The progress bar: simulated time as the position, steps per second, broken bonds,
+/// fragments, ETA. Hidden when stderr is not a terminal.
+struct Bar {
+    bar: ProgressBar,
+    started: Instant,
+    last: Instant,
+}
+
+impl Bar {
+    fn new(visible: bool) -> Bar {
+        let bar = ProgressBar::with_draw_target(
+            Some(1),
+            if visible {
+                ProgressDrawTarget::stderr_with_hz(4)
+            } else {
+                ProgressDrawTarget::hidden()
+            },
+        );
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:30} {percent:>3}% {msg} [{elapsed_precise} < {eta_precise}]",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Bar {
+            bar,
+            started: Instant::now(),
+            last: Instant::now() - Duration::from_secs(1),
+        }
+    }
+
+    fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+impl Observer for Bar {
+    fn step(&mut self, p: &Progress) {
+        // Formatting the message costs more than a small step: refresh a few times a second.
+        if self.last.elapsed() < Duration::from_millis(200) && p.steps < p.total_steps {
+            return;
+        }
+        self.last = Instant::now();
+        self.bar.set_length(p.total_steps);
+        self.bar.set_position(p.steps);
+        let rate = p.steps as f64 / self.started.elapsed().as_secs_f64().max(1e-9);
+        self.bar.set_message(format!(
+            "t {:.3e}/{:.3e} s, {:.0} steps/s, {} broken, {} fragments, frame {}",
+            p.time, p.duration, rate, p.broken_bonds, p.fragments, p.frames_written
+        ));
+    }
+}

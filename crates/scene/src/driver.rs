@@ -1,0 +1,231 @@
+//! The step loop of DESIGN.md as a short list of named stages: release anchors, physics with
+//! contact forces, cut the mesh along the bonds that broke, advect its vertices. Each stage is
+//! timed; the progress bar, the summary and the speed benchmark read the same counters.
+
+use std::time::{Duration, Instant};
+
+use perifrac_contact::{Colliders, ContactStats};
+use perifrac_physics::{ChenModel, Explicit, PhysicsError};
+use perifrac_topology::TetMesh;
+
+/// Wall time spent in each stage since the driver was made.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageTimes {
+    /// Peridynamic forces, integration, fracture check and contact forces.
+    pub physics: Duration,
+    /// Crack faces from broken bonds and vertex splitting.
+    pub topology: Duration,
+    /// Mass-weighted vertex advection.
+    pub advect: Duration,
+    /// Frame output (surfaces, particles, `run.json`), counted by the writer.
+    pub output: Duration,
+}
+
+impl StageTimes {
+    /// All stages together.
+    pub fn total(&self) -> Duration {
+        self.physics + self.topology + self.advect + self.output
+    }
+}
+
+/// Anchor releases: (time in s, the particles freed then).
+pub(crate) type Releases = Vec<(f64, Vec<u32>)>;
+
+/// Bonds broken in one step, as particle pairs `(i, j)`, `i < j`.
+type Broken<'a> = &'a [(u32, u32)];
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepReport {
+    /// Bonds (pairs) broken in this step.
+    pub broken_bonds: usize,
+    /// Crack faces the broken bonds added to the mesh.
+    pub crack_faces: usize,
+    /// Contacts found in this step.
+    pub contact: ContactStats,
+}
+
+/// The simulation state of a running scene: the embedded mesh, the peridynamic solver, the
+/// colliders, and per-particle contact radii and masses. Made by [`crate::Setup::new`].
+pub struct Driver {
+    mesh: TetMesh,
+    solver: Explicit<ChenModel>,
+    colliders: Option<Colliders>,
+    radii: Vec<f64>,
+    masses: Vec<f64>,
+    /// Anchors to release, sorted by time.
+    releases: Releases,
+    next_release: usize,
+    broken_bonds: u64,
+    crack_faces: u64,
+    times: StageTimes,
+}
+
+impl Driver {
+    /// Ties the pieces together. `radii` (m) and `masses` (kg) are per particle (= per tet);
+    /// `releases` lists anchor releases as (time in s, particles).
+    pub(crate) fn new(
+        mesh: TetMesh,
+        solver: Explicit<ChenModel>,
+        colliders: Option<Colliders>,
+        radii: Vec<f64>,
+        masses: Vec<f64>,
+        mut releases: Releases,
+    ) -> Driver {
+        releases.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Driver {
+            mesh,
+            solver,
+            colliders,
+            radii,
+            masses,
+            releases,
+            next_release: 0,
+            broken_bonds: 0,
+            crack_faces: 0,
+            times: StageTimes::default(),
+        }
+    }
+
+    /// Advances one time step. On an instability the error is returned and the state is that
+    /// of the failed step.
+    pub fn step(&mut self) -> Result<StepReport, PhysicsError> {
+        self.release_anchors();
+        let Driver {
+            mesh,
+            solver,
+            colliders,
+            radii,
+            masses,
+            times,
+            ..
+        } = self;
+        let t0 = Instant::now();
+        let (broken, contact) = physics_with_contact(solver, colliders.as_mut(), radii)?;
+        let t1 = Instant::now();
+        let broken_bonds = broken.len();
+        let crack_faces = cut(mesh, broken);
+        let t2 = Instant::now();
+        mesh.advect(solver.dt(), masses, solver.velocities());
+        let t3 = Instant::now();
+        times.physics += t1 - t0;
+        times.topology += t2 - t1;
+        times.advect += t3 - t2;
+        let report = StepReport {
+            broken_bonds,
+            crack_faces,
+            contact,
+        };
+        self.broken_bonds += report.broken_bonds as u64;
+        self.crack_faces += crack_faces as u64;
+        Ok(report)
+    }
+
+    /// Frees the anchors whose release time falls within half a step of now.
+    fn release_anchors(&mut self) {
+        let now = self.solver.time() + 0.5 * self.solver.dt();
+        while let Some((t, particles)) = self.releases.get(self.next_release) {
+            if *t > now {
+                break;
+            }
+            // The indices were checked when the anchors were made.
+            let _ = self.solver.loads_mut().release(particles);
+            self.next_release += 1;
+        }
+    }
+
+    /// The embedded tet mesh, cut and advected so far.
+    pub fn mesh(&self) -> &TetMesh {
+        &self.mesh
+    }
+
+    /// The peridynamic solver (positions, velocities, time, step).
+    pub fn solver(&self) -> &Explicit<ChenModel> {
+        &self.solver
+    }
+
+    /// The solver, mutably (elastic energy needs it).
+    pub fn solver_mut(&mut self) -> &mut Explicit<ChenModel> {
+        &mut self.solver
+    }
+
+    /// The colliders, when the scene has any.
+    pub fn colliders(&self) -> Option<&Colliders> {
+        self.colliders.as_ref()
+    }
+
+    /// Particle masses (kg).
+    pub fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    /// Particle contact radii (m).
+    pub fn radii(&self) -> &[f64] {
+        &self.radii
+    }
+
+    /// Damage `phi` of every particle (0 intact, 1 all bonds broken); zeros without fracture.
+    pub fn damage(&self) -> Vec<f64> {
+        match self.solver.model().damage() {
+            Some(d) => (0..self.masses.len()).map(|i| d.phi(i)).collect(),
+            None => vec![0.0; self.masses.len()],
+        }
+    }
+
+    /// Bonds (pairs) broken since the start.
+    pub fn broken_bonds(&self) -> u64 {
+        self.broken_bonds
+    }
+
+    /// Crack faces added since the start (initial cracks not counted).
+    pub fn crack_faces(&self) -> u64 {
+        self.crack_faces
+    }
+
+    /// Time spent per stage.
+    pub fn stage_times(&self) -> StageTimes {
+        self.times
+    }
+
+    /// Adds frame-output time to the counters.
+    pub(crate) fn add_output_time(&mut self, d: Duration) {
+        self.times.output += d;
+    }
+}
+
+/// Stage 1: one explicit step of the particles, with the colliders' forces added after the
+/// internal ones. Returns the bonds broken in it.
+fn physics_with_contact<'a>(
+    solver: &'a mut Explicit<ChenModel>,
+    colliders: Option<&mut Colliders>,
+    radii: &[f64],
+) -> Result<(Broken<'a>, ContactStats), PhysicsError> {
+    let mut stats = ContactStats::default();
+    let broken = match colliders {
+        None => solver.step()?,
+        Some(c) => solver.step_with(|ext| {
+            stats = c.step(
+                ext.dt,
+                ext.positions,
+                ext.velocities,
+                ext.masses,
+                radii,
+                ext.forces,
+            );
+        })?,
+    };
+    Ok((broken, stats))
+}
+
+/// Stage 2: crack faces between face-adjacent tets whose bond broke, then vertex splitting.
+/// Returns the crack faces added.
+fn cut(mesh: &mut TetMesh, broken: &[(u32, u32)]) -> usize {
+    if broken.is_empty() {
+        return 0;
+    }
+    let added = mesh.crack_bonds(broken);
+    if added > 0 {
+        mesh.split();
+    }
+    added
+}

@@ -1,0 +1,112 @@
+//! Reading a scene file: TOML parsing with line and column in every syntax or schema error.
+
+use crate::error::SceneError;
+use crate::schema::SceneFile;
+use std::path::{Path, PathBuf};
+
+/// A parsed scene: the file's contents and where it came from (relative mesh paths resolve
+/// against its directory).
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The scene file (for messages and relative paths).
+    pub path: PathBuf,
+    /// The TOML text as read.
+    pub text: String,
+    /// The parsed tables.
+    pub file: SceneFile,
+}
+
+impl Scene {
+    /// Reads and parses `path`.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            file: path.to_path_buf(),
+            source,
+        })?;
+        Scene::parse(&text, path)
+    }
+
+    /// Parses `text` as if read from `path`.
+    pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| {
+            let (line, column) = e
+                .span()
+                .map(|s| line_column(text, s.start))
+                .unwrap_or((1, 1));
+            SceneError::Parse {
+                file: path.to_path_buf(),
+                line,
+                column,
+                message: e.message().trim().to_string(),
+            }
+        })?;
+        Ok(Scene {
+            path: path.to_path_buf(),
+            text: text.to_string(),
+            file,
+        })
+    }
+
+    /// The directory relative paths in the scene resolve against.
+    pub fn base_dir(&self) -> PathBuf {
+        match self.path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        }
+    }
+}
+
+/// 1-based line and column (in characters) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str =
+        "[mesh]\nprimitive = \"box\"\nsize = [1.0, 0.1, 0.2]\nresolution = 10\n\n\
+        [[material]]\nyoung = 1e9\npoisson = 0.25\ndensity = 1000.0\n\n\
+        [simulation]\nduration = 0.001\n";
+
+    #[test]
+    fn minimal_scene_parses() {
+        let s = Scene::parse(MINIMAL, Path::new("s.toml")).unwrap();
+        assert_eq!(s.file.material.len(), 1);
+        assert_eq!(s.file.mesh.size, Some([1.0, 0.1, 0.2]));
+    }
+
+    #[test]
+    fn unknown_key_has_line_and_column() {
+        let text = MINIMAL.replace("poisson = 0.25", "poison = 0.25");
+        let err = Scene::parse(&text, Path::new("s.toml")).unwrap_err();
+        let msg = err.to_string();
+        // `poison` is on line 8, column 1
+        assert!(msg.starts_with("s.toml:8:1: "), "{msg}");
+        assert!(msg.contains("poison"), "{msg}");
+    }
+
+    #[test]
+    fn wrong_type_has_line_and_column() {
+        let text = MINIMAL.replace("density = 1000.0", "density = \"heavy\"");
+        let msg = Scene::parse(&text, Path::new("s.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(msg.starts_with("s.toml:9:11: "), "{msg}");
+    }
+
+    #[test]
+    fn line_column_counts_characters() {
+        assert_eq!(line_column("ab\ncdé\nf", 0), (1, 1));
+        assert_eq!(line_column("ab\ncdé\nf", 3), (2, 1));
+        assert_eq!(line_column("ab\ncdé\nf", 8), (3, 1));
+    }
+}

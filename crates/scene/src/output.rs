@@ -1,0 +1,410 @@
+//! The run directory: `scene.toml` (the scene as run), `run.json` (rewritten atomically after
+//! every frame, see [`RunManifest`]) and `frames/` with `surface_NNNN.ply` (binary PLY with the
+//! per-face `crack` flag), optionally `surface_NNNN.inc` (POV-Ray `mesh2` declaring `surface`)
+//! and `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`). Every file is written
+//! to a temporary name and renamed into place, so a reader never sees half a frame.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use perifrac_io::{write_ply, write_ply_points, write_povray_mesh2, PlyEncoding, SurfaceRef};
+use perifrac_topology::Surface;
+use serde::Serialize;
+
+use crate::driver::Driver;
+use crate::error::SceneError;
+use crate::setup::{bounds, OutputOptions, SetupInfo};
+
+/// The identifier of the run-directory layout, written into `run.json`.
+pub const RUN_FORMAT: &str = "perifrac-run/1";
+
+/// Share of the total mass that [`FrameJson::main_bounds`] frames: the heaviest fragments that
+/// together make up this much, so that a cloud of small debris does not shrink the picture.
+pub const MAIN_MASS_SHARE: f64 = 0.9;
+
+/// `run.json`: what the run wrote, for `perifrac render` and other readers. It holds no wall
+/// times, so two runs of one scene give identical files.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunManifest {
+    /// [`RUN_FORMAT`].
+    pub format: String,
+    /// File name of the scene.
+    pub scene: String,
+    /// World up (unit vector).
+    pub up: [f64; 3],
+    /// Rest bounding box of the mesh (m).
+    pub rest_bounds: Bounds,
+    /// Ground planes.
+    pub grounds: Vec<GroundJson>,
+    /// Particles.
+    pub particles: usize,
+    /// Directed bonds at the start.
+    pub bonds: usize,
+    /// Horizon (m).
+    pub horizon: f64,
+    /// Time step (s).
+    pub dt: f64,
+    /// Estimated stable limit (s).
+    pub dt_limit: f64,
+    /// Total particle mass (kg).
+    pub mass: f64,
+    /// Frames written so far.
+    pub frames: Vec<FrameJson>,
+    /// True once the last frame is written.
+    pub finished: bool,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+}
+
+/// A box (m).
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Bounds {
+    /// Lower corner.
+    pub min: [f64; 3],
+    /// Upper corner.
+    pub max: [f64; 3],
+}
+
+/// A ground plane in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct GroundJson {
+    /// A point on it (m).
+    pub point: [f64; 3],
+    /// Outward unit normal.
+    pub normal: [f64; 3],
+}
+
+/// A ball at a frame.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct BallJson {
+    /// Centre (m).
+    pub center: [f64; 3],
+    /// Radius (m).
+    pub radius: f64,
+}
+
+/// One frame in `run.json`; paths are relative to the run directory.
+#[derive(Debug, Clone, Serialize)]
+pub struct FrameJson {
+    /// 0 is the rest state.
+    pub index: usize,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Steps taken up to this frame.
+    pub step: u64,
+    /// Surface PLY.
+    pub surface: String,
+    /// POV-Ray include, when written.
+    pub povray: Option<String>,
+    /// Particle PLY, when written.
+    pub particles: Option<String>,
+    /// Balls at this time.
+    pub balls: Vec<BallJson>,
+    /// Bounds of the whole surface (m).
+    pub bounds: Bounds,
+    /// Bounds of the heaviest fragments making up [`MAIN_MASS_SHARE`] of the mass (m).
+    pub main_bounds: Bounds,
+    /// Connected pieces.
+    pub fragments: usize,
+    /// Bonds broken so far.
+    pub broken_bonds: u64,
+    /// Crack triangles in the surface (both sides counted).
+    pub crack_triangles: usize,
+    /// Particle kinetic energy (J).
+    pub kinetic_energy: f64,
+    /// Elastic energy (J).
+    pub elastic_energy: f64,
+}
+
+/// Refuses a non-empty `dir` unless `force`; reads only, so it can run before the setup.
+pub fn check_output_dir(dir: &Path, force: bool) -> Result<(), SceneError> {
+    let err = |message: String| SceneError::Output {
+        dir: dir.to_path_buf(),
+        message,
+    };
+    if dir.exists() && !dir.is_dir() {
+        return Err(err("exists and is not a directory".into()));
+    }
+    if dir.is_dir() && !force {
+        let mut entries = std::fs::read_dir(dir).map_err(|e| err(e.to_string()))?;
+        if entries.next().is_some() {
+            return Err(err(
+                "is not empty; choose another directory or pass --force to overwrite".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes frames and `run.json` into a run directory.
+pub struct FrameWriter {
+    dir: PathBuf,
+    frames_dir: PathBuf,
+    options: OutputOptions,
+    manifest: RunManifest,
+}
+
+impl FrameWriter {
+    /// Prepares `dir`: removes what an earlier run left there (`run.json`, `scene.toml`,
+    /// `frames/`, `render/`) and nothing else, then writes `scene.toml`.
+    pub fn create(
+        dir: &Path,
+        scene_path: &Path,
+        scene_text: &str,
+        info: &SetupInfo,
+        driver: &Driver,
+        options: OutputOptions,
+    ) -> Result<FrameWriter, SceneError> {
+        let frames_dir = clear_output_dir(dir)?;
+        perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
+            w.write_all(scene_text.as_bytes())
+        })?;
+        let manifest = RunManifest {
+            format: RUN_FORMAT.into(),
+            scene: scene_path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            up: info.up,
+            rest_bounds: Bounds {
+                min: info.rest_bounds.0,
+                max: info.rest_bounds.1,
+            },
+            grounds: driver
+                .colliders()
+                .map(|c| {
+                    c.grounds()
+                        .map(|g| GroundJson {
+                            point: g.point,
+                            normal: g.normal,
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            particles: info.particles,
+            bonds: info.bonds,
+            horizon: info.horizon,
+            dt: info.dt,
+            dt_limit: info.dt_limit,
+            mass: info.mass,
+            frames: Vec::new(),
+            finished: false,
+            error: None,
+        };
+        Ok(FrameWriter {
+            dir: dir.to_path_buf(),
+            frames_dir,
+            options,
+            manifest,
+        })
+    }
+
+    /// Writes frame `index` from the driver's current state and records it in `run.json`
+    /// (`last` marks the run finished). Returns what was recorded.
+    pub fn write_frame(
+        &mut self,
+        index: usize,
+        driver: &mut Driver,
+        last: bool,
+    ) -> Result<&FrameJson, SceneError> {
+        let started = Instant::now();
+        let surface = driver.mesh().surface();
+        let pieces = driver.mesh().pieces();
+        let name = format!("surface_{index:04}");
+        let view = SurfaceRef {
+            vertices: &surface.vertices,
+            faces: &surface.faces,
+            crack: Some(&surface.crack),
+            colors: None,
+        };
+        write_ply(
+            &self.frames_dir.join(format!("{name}.ply")),
+            &view,
+            PlyEncoding::BinaryLittleEndian,
+        )?;
+        let povray = if self.options.povray {
+            let path = self.frames_dir.join(format!("{name}.inc"));
+            write_povray_mesh2(&path, &view, "surface")?;
+            Some(format!("frames/{name}.inc"))
+        } else {
+            None
+        };
+        let particles = if self.options.particles {
+            let path = format!("frames/particles_{index:04}.ply");
+            let damage = driver.damage();
+            let fragment: Vec<f64> = pieces.piece_of_tet.iter().map(|&p| p as f64).collect();
+            write_ply_points(
+                &self.dir.join(&path),
+                driver.solver().positions(),
+                &[
+                    ("damage", &damage),
+                    ("mass", driver.masses()),
+                    ("fragment", &fragment),
+                ],
+            )?;
+            Some(path)
+        } else {
+            None
+        };
+        let piece_mass = piece_masses(&pieces.piece_of_tet, pieces.count, driver.masses());
+        let (lo, hi) = bounds(&surface.vertices);
+        let frame = FrameJson {
+            index,
+            time: driver.solver().time(),
+            step: driver.solver().steps(),
+            surface: format!("frames/{name}.ply"),
+            povray,
+            particles,
+            balls: driver
+                .colliders()
+                .map(|c| {
+                    c.balls()
+                        .map(|b| BallJson {
+                            center: b.center,
+                            radius: b.radius,
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            bounds: Bounds { min: lo, max: hi },
+            main_bounds: main_bounds(&surface, &piece_mass),
+            fragments: pieces.count,
+            broken_bonds: driver.broken_bonds(),
+            crack_triangles: surface.crack.iter().filter(|&&c| c != 0).count(),
+            kinetic_energy: driver.solver().kinetic_energy(),
+            elastic_energy: driver.solver_mut().elastic_energy(),
+        };
+        self.manifest.frames.push(frame);
+        self.manifest.finished = last;
+        self.write_manifest()?;
+        driver.add_output_time(started.elapsed());
+        Ok(self
+            .manifest
+            .frames
+            .last()
+            .expect("a frame was just pushed"))
+    }
+
+    /// Records why the run stopped in `run.json`; the frames written stay.
+    pub fn record_error(&mut self, message: String) -> Result<(), SceneError> {
+        self.manifest.error = Some(message);
+        self.write_manifest()
+    }
+
+    /// Frames written so far, the initial one included.
+    pub fn frames_written(&self) -> usize {
+        self.manifest.frames.len()
+    }
+
+    /// What `run.json` holds now.
+    pub fn manifest(&self) -> &RunManifest {
+        &self.manifest
+    }
+
+    fn write_manifest(&self) -> Result<(), SceneError> {
+        let text =
+            serde_json::to_string_pretty(&self.manifest).map_err(|e| SceneError::Output {
+                dir: self.dir.clone(),
+                message: format!("cannot encode run.json: {e}"),
+            })?;
+        perifrac_io::atomic_write(&self.dir.join("run.json"), |w| {
+            w.write_all(text.as_bytes())?;
+            w.write_all(b"\n")
+        })?;
+        Ok(())
+    }
+}
+
+/// Removes an earlier run's files from `dir` (and nothing else) and creates `dir/frames`.
+fn clear_output_dir(dir: &Path) -> Result<PathBuf, SceneError> {
+    let err = |message: String| SceneError::Output {
+        dir: dir.to_path_buf(),
+        message,
+    };
+    for name in ["frames", "render"] {
+        let p = dir.join(name);
+        if p.is_dir() {
+            std::fs::remove_dir_all(&p).map_err(|e| err(format!("cannot clear {name}/: {e}")))?;
+        }
+    }
+    for name in ["run.json", "scene.toml"] {
+        let p = dir.join(name);
+        if p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| err(format!("cannot remove {name}: {e}")))?;
+        }
+    }
+    let frames = dir.join("frames");
+    std::fs::create_dir_all(&frames).map_err(|e| err(format!("cannot create: {e}")))?;
+    Ok(frames)
+}
+
+/// Mass (kg) of each of `count` pieces.
+fn piece_masses(piece_of_tet: &[u32], count: usize, masses: &[f64]) -> Vec<f64> {
+    let mut m = vec![0.0; count];
+    for (&p, &mass) in piece_of_tet.iter().zip(masses) {
+        m[p as usize] += mass;
+    }
+    m
+}
+
+/// Bounds of the surface faces of the heaviest pieces that together reach
+/// [`MAIN_MASS_SHARE`] of the total mass (ties broken by piece id, so it is deterministic).
+fn main_bounds(surface: &Surface, piece_mass: &[f64]) -> Bounds {
+    let total: f64 = piece_mass.iter().sum();
+    let mut order: Vec<usize> = (0..piece_mass.len()).collect();
+    order.sort_by(|&a, &b| piece_mass[b].total_cmp(&piece_mass[a]).then(a.cmp(&b)));
+    let mut keep = vec![false; piece_mass.len()];
+    let mut sum = 0.0;
+    for p in order {
+        keep[p] = true;
+        sum += piece_mass[p];
+        if sum >= MAIN_MASS_SHARE * total {
+            break;
+        }
+    }
+    let kept: Vec<[f64; 3]> = surface
+        .faces
+        .iter()
+        .zip(&surface.piece)
+        .filter(|(_, &p)| keep[p as usize])
+        .flat_map(|(face, _)| face.map(|v| surface.vertices[v as usize]))
+        .collect();
+    let (min, max) = bounds(&kept);
+    Bounds { min, max }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn main_bounds_skip_light_debris() {
+        // Piece 0 (heavy) spans the unit cube; piece 1 (1% of the mass) sits far away.
+        let surface = Surface {
+            vertices: vec![
+                [0.0; 3],
+                [1.0, 1.0, 1.0],
+                [0.0, 1.0, 0.0],
+                [9.0; 3],
+                [9.5; 3],
+                [9.0, 9.5, 9.0],
+            ],
+            vertex_ids: (0..6).collect(),
+            faces: vec![[0, 1, 2], [3, 4, 5]],
+            crack: vec![0, 1],
+            piece: vec![0, 1],
+        };
+        let b = main_bounds(&surface, &[99.0, 1.0]);
+        assert_eq!(
+            b,
+            Bounds {
+                min: [0.0; 3],
+                max: [1.0; 3]
+            }
+        );
+        // With two equal pieces both are needed to reach 90%.
+        let b = main_bounds(&surface, &[1.0, 1.0]);
+        assert_eq!(b.max, [9.5; 3]);
+    }
+}

@@ -1,0 +1,230 @@
+//! The scene file (TOML): what a user writes. Every table rejects unknown keys, so a typo is an
+//! error with its line and column rather than a silently ignored setting.
+//!
+//! Units are SI: metres, seconds, kilograms, pascals.
+
+use serde::Deserialize;
+use std::path::PathBuf;
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// What is simulated (a primitive or a mesh file).
+    pub mesh: MeshSpec,
+    /// Materials; the first without a `region` is the default, later regions override earlier.
+    pub material: Vec<MaterialSpec>,
+    /// Time stepping, horizon, loads.
+    pub simulation: SimulationSpec,
+    /// Ground planes.
+    #[serde(default)]
+    pub ground: Vec<GroundSpec>,
+    /// Spheres (kinematic or dynamic).
+    #[serde(default)]
+    pub ball: Vec<BallSpec>,
+    /// Particles held fixed or moved at a prescribed velocity.
+    #[serde(default)]
+    pub anchor: Vec<AnchorSpec>,
+    /// Initial velocities.
+    #[serde(default)]
+    pub velocity: Vec<VelocitySpec>,
+    /// Cracks present at the start.
+    #[serde(default)]
+    pub precrack: Vec<PrecrackSpec>,
+    /// What is written, and how often.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// The object: a built-in primitive or a file.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// `"box"`, `"sphere"` or `"cylinder"` (along z); exclusive with `file`.
+    pub primitive: Option<String>,
+    /// A tet mesh (`.mesh`, `.node`/`.ele`, `.msh`, `.vtk`) or a closed surface (`.obj`, `.off`,
+    /// `.ply`, meshed with the built-in mesher), relative to the scene file.
+    pub file: Option<PathBuf>,
+    /// Box extent along x, y, z (m).
+    pub size: Option<[f64; 3]>,
+    /// Sphere or cylinder radius (m).
+    pub radius: Option<f64>,
+    /// Cylinder height (m).
+    pub height: Option<f64>,
+    /// Box cells along x, y, z (6 tets each).
+    pub cells: Option<[usize; 3]>,
+    /// Cells across the longest side (boxes), or lattice resolution (surfaces, round primitives).
+    pub resolution: Option<usize>,
+    /// Uniform scale applied to a file's coordinates (before `translate`).
+    pub scale: Option<f64>,
+    /// Translation (m) applied last; boxes start at the origin, spheres are centred on it.
+    pub translate: Option<[f64; 3]>,
+}
+
+/// An axis-aligned box of rest positions (m).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    /// Lower corner.
+    pub min: [f64; 3],
+    /// Upper corner.
+    pub max: [f64; 3],
+}
+
+impl Region {
+    /// Whether `p` lies in the closed box.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        (0..3).all(|k| p[k] >= self.min[k] && p[k] <= self.max[k])
+    }
+}
+
+/// One material (Chen elastoplastic with fracture, MODEL.md section 2).
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// A name for messages.
+    pub name: Option<String>,
+    /// Particles whose rest barycentre lies in this box get this material.
+    pub region: Option<Region>,
+    /// Young's modulus (Pa), with `poisson`; or give `bulk_modulus` and `shear_modulus`.
+    pub young: Option<f64>,
+    /// Poisson's ratio.
+    pub poisson: Option<f64>,
+    /// Bulk modulus kappa (Pa), as in the paper's Table 1.
+    pub bulk_modulus: Option<f64>,
+    /// Shear modulus mu (Pa).
+    pub shear_modulus: Option<f64>,
+    /// Density (kg/m^3).
+    pub density: f64,
+    /// Critical stretch measure `s_crit` (dimensionless); absent or `inf`: no fracture.
+    pub s_crit: Option<f64>,
+    /// Damage scaling of the threshold (default 0).
+    pub alpha: Option<f64>,
+    /// Yield limit `Psi0` in the raw units of `A^2` (depends on the horizon); or `yield_strain`.
+    pub yield_psi0: Option<f64>,
+    /// Yield as a deviatoric bond strain (dimensionless), converted to `Psi0` for the horizon.
+    pub yield_strain: Option<f64>,
+    /// Plastic extension cap as a ratio of the rest bond length (default 0.2 when plastic).
+    pub plastic_cap: Option<f64>,
+    /// Anisotropy: the diagonal of `G` in `omega = delta / |G xi|` (default isotropic).
+    pub anisotropy: Option<[f64; 3]>,
+}
+
+/// `dt = "auto"` or a number of seconds.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum DtSpec {
+    /// A fixed step (s).
+    Seconds(f64),
+    /// Only `"auto"` is accepted.
+    Word(String),
+}
+
+/// Time stepping and global loads.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Horizon as a multiple of the mean tet edge length (default 1.45, the paper's).
+    pub horizon_factor: Option<f64>,
+    /// Time step: `"auto"` (default) or seconds; a fixed step above the stable limit is refused.
+    pub dt: Option<DtSpec>,
+    /// Fraction of the stable limit used by `"auto"` (default 0.8).
+    pub safety: Option<f64>,
+    /// Simulated duration (s).
+    pub duration: f64,
+    /// Gravity (m/s^2), default none.
+    pub gravity: Option<[f64; 3]>,
+    /// Mass-proportional damping (1/s), default 0.
+    pub damping: Option<f64>,
+    /// Contact radius of a particle as a multiple of its volume-equivalent radius, capped on the
+    /// boundary at the distance to the surface (default 1; see `setup::radii`).
+    pub contact_radius: Option<f64>,
+}
+
+/// A ground plane (half-space) through `point` with outward `normal`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GroundSpec {
+    /// A point on the plane (m); default the origin.
+    pub point: Option<[f64; 3]>,
+    /// Outward normal (default +z).
+    pub normal: Option<[f64; 3]>,
+    /// Penalty stiffness as a multiple of `E r_p` (default 1).
+    pub stiffness_factor: Option<f64>,
+    /// Normal damping as a fraction of critical (default 0.1).
+    pub damping_ratio: Option<f64>,
+    /// Coulomb friction coefficient (default 0.5).
+    pub friction: Option<f64>,
+}
+
+/// A sphere collider.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BallSpec {
+    /// Centre at the start (m).
+    pub center: [f64; 3],
+    /// Radius (m).
+    pub radius: f64,
+    /// Velocity (m/s): constant for a kinematic ball, initial for a dynamic one.
+    pub velocity: Option<[f64; 3]>,
+    /// Mass (kg): the ball is dynamic (gravity, reactions) when a mass or density is given.
+    pub mass: Option<f64>,
+    /// Density (kg/m^3), the alternative to `mass`.
+    pub density: Option<f64>,
+    /// Penalty stiffness as a multiple of `E r_p` (default 1).
+    pub stiffness_factor: Option<f64>,
+    /// Normal damping as a fraction of critical (default 0.1).
+    pub damping_ratio: Option<f64>,
+    /// Coulomb friction coefficient (default 0.5).
+    pub friction: Option<f64>,
+}
+
+/// Particles in a region held at a prescribed velocity (zero: fixed).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AnchorSpec {
+    /// Which particles (rest barycentres in the box).
+    pub region: Region,
+    /// Prescribed velocity (m/s), default zero.
+    pub velocity: Option<[f64; 3]>,
+    /// Time (s) at which the particles are released, default never.
+    pub until: Option<f64>,
+}
+
+/// Initial velocity of the particles in a region (all when absent): `linear + angular x (X - center)`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VelocitySpec {
+    /// Which particles; default all.
+    pub region: Option<Region>,
+    /// Linear velocity (m/s).
+    pub linear: Option<[f64; 3]>,
+    /// Angular velocity (rad/s) about `center`.
+    pub angular: Option<[f64; 3]>,
+    /// Centre of rotation (m), default the centre of the rest bounding box.
+    pub center: Option<[f64; 3]>,
+}
+
+/// An initial crack: the faces between tets on opposite sides of the plane, within the box.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PrecrackSpec {
+    /// A point on the crack plane (m).
+    pub point: [f64; 3],
+    /// The plane's normal.
+    pub normal: [f64; 3],
+    /// Faces whose centroid lies in this box are cut.
+    pub region: Region,
+}
+
+/// Frame output.
+#[derive(Debug, Clone, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Number of frames after the initial one (default 24); `perifrac run --frames` overrides.
+    pub frames: Option<usize>,
+    /// Also write POV-Ray `mesh2` includes (default true).
+    pub povray: Option<bool>,
+    /// Also write particles with damage as PLY points (default true).
+    pub particles: Option<bool>,
+}

@@ -1,0 +1,209 @@
+//! Checks of every scene value that does not need the mesh, with the key path in each message.
+
+use std::path::Path;
+
+use crate::error::SceneError;
+use crate::schema::{Region, SceneFile};
+
+use super::defaults;
+use super::math::norm;
+
+/// The scene file a message names.
+pub(super) struct Ctx<'a> {
+    /// The scene file.
+    pub(super) file: &'a Path,
+}
+
+impl Ctx<'_> {
+    /// The physics crate refused something; the message names the scene file.
+    pub(super) fn physics(&self, source: perifrac_physics::PhysicsError) -> SceneError {
+        SceneError::Physics {
+            file: self.file.to_path_buf(),
+            source,
+        }
+    }
+    pub(super) fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
+        SceneError::invalid(self.file, key, message)
+    }
+    pub(super) fn positive(&self, key: &str, v: f64, unit: &str) -> Result<f64, SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("{v} {unit} must be positive and finite")))
+        }
+    }
+    pub(super) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("{v} must be finite and >= 0")))
+        }
+    }
+    pub(super) fn finite3(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+        if v.iter().all(|c| c.is_finite()) {
+            Ok(v)
+        } else {
+            Err(self.err(key, format!("{v:?} must be finite")))
+        }
+    }
+    pub(super) fn direction(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+        let v = self.finite3(key, v)?;
+        let n = norm(v);
+        if n < 1e-12 {
+            return Err(self.err(key, format!("{v:?} is not a direction (zero length)")));
+        }
+        Ok(v.map(|c| c / n))
+    }
+    pub(super) fn region(&self, key: &str, r: &Region) -> Result<(), SceneError> {
+        self.finite3(&format!("{key}.min"), r.min)?;
+        self.finite3(&format!("{key}.max"), r.max)?;
+        if (0..3).any(|k| r.min[k] > r.max[k]) {
+            return Err(self.err(
+                key,
+                format!("min {:?} exceeds max {:?} on some axis", r.min, r.max),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Checks every number that does not need the mesh, so that a typo fails before meshing.
+pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError> {
+    let sim = &f.simulation;
+    ctx.positive("simulation.duration", sim.duration, "s")?;
+    if let Some(k) = sim.horizon_factor {
+        ctx.positive("simulation.horizon_factor", k, "")?;
+        if k > 6.0 {
+            return Err(ctx.err(
+                "simulation.horizon_factor",
+                format!("{k} is far above the usual 1.0 to 2.0 (at most 6)"),
+            ));
+        }
+    }
+    if let Some(s) = sim.safety {
+        if !(s > 0.0 && s <= 1.0) {
+            return Err(ctx.err("simulation.safety", format!("{s} must be in (0, 1]")));
+        }
+    }
+    if let Some(g) = sim.gravity {
+        ctx.finite3("simulation.gravity", g)?;
+    }
+    if let Some(d) = sim.damping {
+        ctx.non_negative("simulation.damping", d)?;
+    }
+    if let Some(c) = sim.contact_radius {
+        ctx.positive("simulation.contact_radius", c, "")?;
+    }
+    if f.material.is_empty() {
+        return Err(ctx.err("material", "at least one [[material]] is needed"));
+    }
+    for (i, m) in f.material.iter().enumerate() {
+        let key = format!("material[{i}]");
+        match (i, &m.region) {
+            (0, Some(_)) => {
+                return Err(ctx.err(
+                    "material[0].region",
+                    "the first material is the default everywhere; give regions to later ones",
+                ))
+            }
+            (i, None) if i > 0 => {
+                return Err(ctx.err(
+                    format!("{key}.region"),
+                    "materials after the first need a region",
+                ))
+            }
+            (_, Some(r)) => ctx.region(&format!("{key}.region"), r)?,
+            _ => {}
+        }
+        ctx.positive(&format!("{key}.density"), m.density, "kg/m^3")?;
+    }
+    for (i, gr) in f.ground.iter().enumerate() {
+        let key = format!("ground[{i}]");
+        if let Some(p) = gr.point {
+            ctx.finite3(&format!("{key}.point"), p)?;
+        }
+        if let Some(nrm) = gr.normal {
+            ctx.direction(&format!("{key}.normal"), nrm)?;
+        }
+        contact_params(
+            ctx,
+            &key,
+            gr.stiffness_factor,
+            gr.damping_ratio,
+            gr.friction,
+        )?;
+    }
+    for (i, b) in f.ball.iter().enumerate() {
+        let key = format!("ball[{i}]");
+        ctx.finite3(&format!("{key}.center"), b.center)?;
+        ctx.positive(&format!("{key}.radius"), b.radius, "m")?;
+        if let Some(v) = b.velocity {
+            ctx.finite3(&format!("{key}.velocity"), v)?;
+        }
+        if b.mass.is_some() && b.density.is_some() {
+            return Err(ctx.err(&key, "give either mass or density, not both"));
+        }
+        if let Some(m) = b.mass {
+            ctx.positive(&format!("{key}.mass"), m, "kg")?;
+        }
+        if let Some(d) = b.density {
+            ctx.positive(&format!("{key}.density"), d, "kg/m^3")?;
+        }
+        contact_params(ctx, &key, b.stiffness_factor, b.damping_ratio, b.friction)?;
+    }
+    for (i, a) in f.anchor.iter().enumerate() {
+        ctx.region(&format!("anchor[{i}].region"), &a.region)?;
+        if let Some(v) = a.velocity {
+            ctx.finite3(&format!("anchor[{i}].velocity"), v)?;
+        }
+        if let Some(t) = a.until {
+            ctx.non_negative(&format!("anchor[{i}].until"), t)?;
+        }
+    }
+    for (i, v) in f.velocity.iter().enumerate() {
+        let key = format!("velocity[{i}]");
+        if let Some(r) = &v.region {
+            ctx.region(&format!("{key}.region"), r)?;
+        }
+        for (name, x) in [
+            ("linear", v.linear),
+            ("angular", v.angular),
+            ("center", v.center),
+        ] {
+            if let Some(x) = x {
+                ctx.finite3(&format!("{key}.{name}"), x)?;
+            }
+        }
+    }
+    for (i, p) in f.precrack.iter().enumerate() {
+        let key = format!("precrack[{i}]");
+        ctx.finite3(&format!("{key}.point"), p.point)?;
+        ctx.direction(&format!("{key}.normal"), p.normal)?;
+        ctx.region(&format!("{key}.region"), &p.region)?;
+    }
+    if f.output.frames == Some(0) {
+        return Err(ctx.err("output.frames", "must be at least 1"));
+    }
+    Ok(())
+}
+
+/// Validated contact coefficients `(stiffness factor, damping ratio, friction)`.
+pub(super) fn contact_params(
+    ctx: &Ctx,
+    key: &str,
+    stiffness: Option<f64>,
+    damping: Option<f64>,
+    friction: Option<f64>,
+) -> Result<(f64, f64, f64), SceneError> {
+    let k = stiffness.unwrap_or(defaults::STIFFNESS_FACTOR);
+    ctx.positive(&format!("{key}.stiffness_factor"), k, "")?;
+    let d = ctx.non_negative(
+        &format!("{key}.damping_ratio"),
+        damping.unwrap_or(defaults::DAMPING_RATIO),
+    )?;
+    let mu = ctx.non_negative(
+        &format!("{key}.friction"),
+        friction.unwrap_or(defaults::FRICTION),
+    )?;
+    Ok((k, d, mu))
+}

@@ -1,0 +1,118 @@
+//! Colliders from the scene's `[[ground]]` and `[[ball]]` tables.
+
+use std::f64::consts::PI;
+
+use perifrac_contact::{BallDesc, BallMotion, Colliders, ContactParams, GroundDesc};
+
+use perifrac_topology::TetMesh;
+
+use crate::error::SceneError;
+use crate::schema::SceneFile;
+
+use super::check::{contact_params, Ctx};
+
+/// What the colliders add to the highest frequency of the system, for the stable step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct ContactStiffness {
+    /// Sum of the penalty stiffnesses of all colliders (N/m): a particle can touch every
+    /// collider at once (squeezed between a ball and the ground, say), never one twice.
+    pub per_particle: f64,
+    /// Largest `omega^2` (1/s^2) of a dynamic ball on the particles it can touch at once,
+    /// `n k / M` with `n = 4 ((R + r) / r)^2` (as many contact spheres of radius `r` as fit
+    /// around it): a light ball rings faster than the particles it hits.
+    pub ball_omega2: f64,
+}
+
+/// The colliders and their stiffness, or `None` when the scene has none. `young` (Pa) and
+/// `radius` (mean contact radius, m) scale the penalty stiffness.
+pub(super) fn build_colliders(
+    ctx: &Ctx,
+    f: &SceneFile,
+    young: f64,
+    radius: f64,
+    gravity: [f64; 3],
+) -> Result<Option<(Colliders, ContactStiffness)>, SceneError> {
+    if f.ground.is_empty() && f.ball.is_empty() {
+        return Ok(None);
+    }
+    let mut grounds = Vec::new();
+    let mut stiffness = ContactStiffness::default();
+    for (i, g) in f.ground.iter().enumerate() {
+        let (k, d, mu) = contact_params(
+            ctx,
+            &format!("ground[{i}]"),
+            g.stiffness_factor,
+            g.damping_ratio,
+            g.friction,
+        )?;
+        let params = ContactParams::from_material(young, radius, k, d, mu);
+        stiffness.per_particle += params.stiffness;
+        grounds.push(GroundDesc {
+            point: g.point.unwrap_or([0.0; 3]),
+            normal: g.normal.unwrap_or([0.0, 0.0, 1.0]),
+            params,
+        });
+    }
+    let mut balls = Vec::new();
+    for (i, b) in f.ball.iter().enumerate() {
+        let (k, d, mu) = contact_params(
+            ctx,
+            &format!("ball[{i}]"),
+            b.stiffness_factor,
+            b.damping_ratio,
+            b.friction,
+        )?;
+        let velocity = b.velocity.unwrap_or([0.0; 3]);
+        let mass = b
+            .mass
+            .or(b.density.map(|rho| rho * 4.0 / 3.0 * PI * b.radius.powi(3)));
+        let motion = match mass {
+            Some(mass) => BallMotion::Dynamic { mass, velocity },
+            None => BallMotion::Kinematic { velocity },
+        };
+        let params = ContactParams::from_material(young, radius, k, d, mu);
+        stiffness.per_particle += params.stiffness;
+        if let Some(m) = mass {
+            let touching = 4.0 * ((b.radius + radius) / radius).powi(2);
+            stiffness.ball_omega2 = stiffness.ball_omega2.max(touching * params.stiffness / m);
+        }
+        balls.push(BallDesc {
+            center: b.center,
+            radius: b.radius,
+            motion,
+            params,
+        });
+    }
+    Colliders::new(grounds, balls, gravity)
+        .map(|c| Some((c, stiffness)))
+        .map_err(|e| ctx.err("ball/ground", e.to_string()))
+}
+
+/// Refuses colliders that start inside the object: a particle's contact sphere (centre
+/// `rest`, radius `radii`, m) reaching below a ground or into a ball, or a ball centre inside
+/// the mesh's closed boundary.
+pub(super) fn check_placement(
+    ctx: &Ctx,
+    colliders: &Colliders,
+    mesh: &TetMesh,
+    rest: &[[f64; 3]],
+    radii: &[f64],
+) -> Result<(), SceneError> {
+    colliders.check_clear(rest, radii).map_err(|e| {
+        ctx.err(
+            "ball/ground",
+            format!("collider inside the object at the start: {e}"),
+        )
+    })?;
+    let surface = mesh.surface();
+    let inside = colliders
+        .balls_inside_surface(&surface.vertices, &surface.faces)
+        .map_err(|e| ctx.err("ball", e.to_string()))?;
+    if let Some(&b) = inside.first() {
+        return Err(ctx.err(
+            format!("ball[{b}].center"),
+            "collider inside the object at the start (the centre is inside the mesh)",
+        ));
+    }
+    Ok(())
+}

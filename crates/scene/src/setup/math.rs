@@ -1,0 +1,38 @@
+//! Small vector helpers of the setup.
+
+/// Length of `v`.
+pub(super) fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// `a x b`.
+pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Axis-aligned bounds of `points` (infinite, inverted bounds when empty).
+pub(crate) fn bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// World up: opposite gravity, +z without gravity.
+pub(super) fn up_from_gravity(gravity: [f64; 3]) -> [f64; 3] {
+    let g = norm(gravity);
+    if g > 0.0 {
+        gravity.map(|c| -c / g)
+    } else {
+        [0.0, 0.0, 1.0]
+    }
+}

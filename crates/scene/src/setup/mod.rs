@@ -1,0 +1,221 @@
+//! From a parsed scene to a ready [`Driver`]: validation with one clear message per problem, the
+//! mesh, materials by region, initial cracks, the peridynamic model, colliders, loads and the
+//! time step. Nothing is written to disk here.
+
+mod check;
+mod colliders;
+mod loads;
+mod material;
+mod math;
+mod mesh;
+mod radii;
+mod step;
+
+use std::path::PathBuf;
+
+use perifrac_physics::{
+    ChenModel, Discretization, Explicit, ExplicitConfig, PhysicsError, TimeStep,
+};
+use perifrac_topology::TetMesh;
+
+use crate::driver::Driver;
+use crate::error::SceneError;
+use crate::load::Scene;
+use crate::schema::SceneFile;
+
+use check::Ctx;
+pub(crate) use math::bounds;
+
+/// Defaults the scene may override.
+pub mod defaults {
+    /// Horizon factor (the paper's 1.45).
+    pub const HORIZON_FACTOR: f64 = 1.45;
+    /// Fraction of the stable limit for `dt = "auto"`.
+    pub const SAFETY: f64 = 0.8;
+    /// Frames after the initial one.
+    pub const FRAMES: usize = 24;
+    /// Box cells across the longest side when neither `cells` nor `resolution` is given.
+    pub const BOX_RESOLUTION: usize = 20;
+    /// Plastic cap ratio when a yield limit is given without one.
+    pub const PLASTIC_CAP: f64 = 0.2;
+    /// Contact penalty factor on `E r_p`.
+    pub const STIFFNESS_FACTOR: f64 = 1.0;
+    /// Contact normal damping ratio.
+    pub const DAMPING_RATIO: f64 = 0.1;
+    /// Coulomb friction.
+    pub const FRICTION: f64 = 0.5;
+    /// Facets around the round primitives' surfaces before meshing.
+    pub const ROUND_SEGMENTS: usize = 64;
+    /// A fixed step may be at most this fraction of the estimated limit: the power iteration
+    /// converges from below, so the estimate itself is not a safe step.
+    pub const MAX_FIXED_FRACTION: f64 = 0.95;
+    /// The blow-up guard: a step that moves a particle further than this fraction of the
+    /// horizon stops the run.
+    pub const GUARD_FRACTION: f64 = 0.5;
+    /// `dt = "auto"` also keeps the fastest ball or particle at the start from moving more than
+    /// this fraction of the mean contact radius per step, so that a contact builds up over
+    /// several steps instead of appearing at full depth in one.
+    pub const TRAVEL_FRACTION: f64 = 0.1;
+}
+
+/// What the run writes besides the surface PLY.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct OutputOptions {
+    /// POV-Ray `mesh2` includes.
+    pub povray: bool,
+    /// Particles with damage as PLY points.
+    pub particles: bool,
+}
+
+/// Facts about the prepared scene, for the summary and `run.json`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SetupInfo {
+    /// Particles (= tets).
+    pub particles: usize,
+    /// Directed bonds.
+    pub bonds: usize,
+    /// Horizon (m).
+    pub horizon: f64,
+    /// Mean tet edge length (m).
+    pub edge_length: f64,
+    /// Stable step estimate (s), contact stiffness included.
+    pub dt_limit: f64,
+    /// Longest step (s) in which the fastest ball or particle at the start moves
+    /// [`defaults::TRAVEL_FRACTION`] of the mean contact radius; infinite without colliders.
+    pub travel_limit: f64,
+    /// The step used (s): the requested one, shortened so that frames fall on steps.
+    pub dt: f64,
+    /// Total particle mass (kg).
+    pub mass: f64,
+    /// World up: opposite gravity, +z without gravity.
+    pub up: [f64; 3],
+    /// Rest bounding box (m).
+    pub rest_bounds: ([f64; 3], [f64; 3]),
+    /// Crack faces cut at the start.
+    pub precrack_faces: usize,
+}
+
+/// A scene ready to run.
+pub struct Setup {
+    /// The scene file.
+    pub scene_path: PathBuf,
+    /// Its text (copied into the output directory).
+    pub scene_text: String,
+    /// The simulation state.
+    pub driver: Driver,
+    /// Frames after the initial one.
+    pub frames: usize,
+    /// Steps between frames.
+    pub steps_per_frame: u64,
+    /// What to write.
+    pub output: OutputOptions,
+    /// Facts for the summary.
+    pub info: SetupInfo,
+}
+
+impl Setup {
+    /// Validates and builds everything `scene` asks for; `frames` overrides the scene's frame
+    /// count.
+    pub fn new(scene: &Scene, frames: Option<usize>) -> Result<Setup, SceneError> {
+        let ctx = Ctx { file: &scene.path };
+        let f = &scene.file;
+        check::check_settings(&ctx, f)?;
+        let physics = |source: PhysicsError| ctx.physics(source);
+
+        let mut mesh = mesh::build_mesh(&ctx, scene)?;
+        let rest = mesh.rest_barycentres();
+        let volumes = mesh.rest_volumes();
+        let edge = mesh.mean_edge_length();
+        let sim = &f.simulation;
+        let horizon = sim.horizon_factor.unwrap_or(defaults::HORIZON_FACTOR) * edge;
+
+        let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
+        let masses: Vec<f64> = volumes
+            .iter()
+            .zip(&ids)
+            .map(|(v, &id)| v * materials[id as usize].density)
+            .collect();
+
+        let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
+        let (mut disc, report) =
+            Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
+        disc.set_materials(&ids).map_err(physics)?;
+        let mut model = ChenModel::new(disc, &materials).map_err(physics)?;
+
+        let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
+        let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;
+        let young = materials.iter().map(|m| m.young()).fold(0.0, f64::max);
+        let gravity = sim.gravity.unwrap_or([0.0; 3]);
+        let colliders = colliders::build_colliders(&ctx, f, young, mean_radius, gravity)?;
+        if let Some((col, _)) = &colliders {
+            colliders::check_placement(&ctx, col, &mesh, &rest, &radii)?;
+        }
+        let contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
+
+        let velocities = loads::initial_velocities(&ctx, f, &rest)?;
+        let dt_limit = step::stable_limit(&mut model, &rest, horizon, &masses, contact);
+        let travel_limit = colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
+            step::travel_limit(c, &radii, &velocities)
+        });
+        let dt_wanted = step::requested_step(&ctx, sim, dt_limit, travel_limit)?;
+        let frames = frames
+            .or(f.output.frames)
+            .unwrap_or(defaults::FRAMES)
+            .max(1);
+        let (dt, steps_per_frame) = step::fit_to_frames(sim.duration, frames, dt_wanted);
+
+        let (loads, releases) = loads::loads(&ctx, f, &rest, gravity)?;
+        let config = ExplicitConfig {
+            dt: TimeStep::Fixed(dt),
+            guard_fraction: defaults::GUARD_FRACTION,
+        };
+        let mut solver = Explicit::new(model, &rest, horizon, loads, config).map_err(physics)?;
+        solver.velocities_mut().copy_from_slice(&velocities);
+
+        let info = SetupInfo {
+            particles: rest.len(),
+            bonds: report.bonds,
+            horizon,
+            edge_length: edge,
+            dt_limit,
+            travel_limit,
+            dt,
+            mass: masses.iter().sum(),
+            up: math::up_from_gravity(gravity),
+            rest_bounds: bounds(mesh.rest_positions()),
+            precrack_faces,
+        };
+        let driver = Driver::new(
+            mesh,
+            solver,
+            colliders.map(|(c, _)| c),
+            radii,
+            masses,
+            releases,
+        );
+        Ok(Setup {
+            scene_path: scene.path.clone(),
+            scene_text: scene.text.clone(),
+            driver,
+            frames,
+            steps_per_frame,
+            output: output_options(f),
+            info,
+        })
+    }
+}
+
+fn output_options(f: &SceneFile) -> OutputOptions {
+    OutputOptions {
+        povray: f.output.povray.unwrap_or(true),
+        particles: f.output.particles.unwrap_or(true),
+    }
+}
+
+/// The mesh after setup, for tests that look at the initial cracks.
+impl Setup {
+    /// The embedded tet mesh at the start.
+    pub fn mesh(&self) -> &TetMesh {
+        self.driver.mesh()
+    }
+}

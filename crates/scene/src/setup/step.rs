@@ -1,0 +1,109 @@
+//! The time step: the stable limit of material and contact, the scene's request, and the fit
+//! to whole steps per frame.
+
+use perifrac_contact::Colliders;
+use perifrac_physics::{max_frequency, ChenModel, ForceModel};
+
+use crate::error::SceneError;
+use crate::schema::{DtSpec, SimulationSpec};
+
+use super::check::Ctx;
+use super::colliders::ContactStiffness;
+use super::defaults;
+
+/// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
+/// (power iteration on the linearised forces at `rest`, Silling-Askari when it fails), all
+/// contact springs on the lightest particle, and the fastest dynamic ball on the particles it
+/// touches (see [`ContactStiffness`]).
+pub(super) fn stable_limit(
+    model: &mut ChenModel,
+    rest: &[[f64; 3]],
+    horizon: f64,
+    masses: &[f64],
+    contact: ContactStiffness,
+) -> f64 {
+    let est = max_frequency(model, rest, horizon, 100, 1e-5);
+    let omega = if est.omega_max.is_finite() && est.omega_max > 0.0 {
+        est.omega_max
+    } else {
+        2.0 / model.silling_askari_step()
+    };
+    let m_min = masses.iter().cloned().fold(f64::INFINITY, f64::min);
+    2.0 / (omega * omega + contact.per_particle / m_min + contact.ball_omega2).sqrt()
+}
+
+/// The longest step (s) in which the fastest ball (by its initial velocity) or particle (by
+/// `velocities`, m/s) moves [`defaults::TRAVEL_FRACTION`] of the mean contact radius
+/// (`radii`, m; the mean, because a few slivers at the surface must not set the pace for
+/// all); infinite when nothing moves.
+pub(super) fn travel_limit(colliders: &Colliders, radii: &[f64], velocities: &[[f64; 3]]) -> f64 {
+    let speed = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let v_max = colliders
+        .balls()
+        .map(|b| speed(b.velocity))
+        .chain(velocities.iter().map(|&v| speed(v)))
+        .fold(0.0, f64::max);
+    let r_mean = radii.iter().sum::<f64>() / radii.len().max(1) as f64;
+    if v_max > 0.0 {
+        defaults::TRAVEL_FRACTION * r_mean / v_max
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The step the scene asks for (s): `"auto"` is `safety` times the stable limit, and at most
+/// `travel_limit`; a fixed step above [`defaults::MAX_FIXED_FRACTION`] of the stable limit is
+/// refused.
+pub(super) fn requested_step(
+    ctx: &Ctx,
+    sim: &SimulationSpec,
+    dt_limit: f64,
+    travel_limit: f64,
+) -> Result<f64, SceneError> {
+    let auto = || (sim.safety.unwrap_or(defaults::SAFETY) * dt_limit).min(travel_limit);
+    match &sim.dt {
+        None => Ok(auto()),
+        Some(DtSpec::Word(w)) if w == "auto" => Ok(auto()),
+        Some(DtSpec::Word(w)) => Err(ctx.err(
+            "simulation.dt",
+            format!("\"{w}\": expected \"auto\" or a step in seconds"),
+        )),
+        Some(DtSpec::Seconds(dt)) => {
+            let dt = ctx.positive("simulation.dt", *dt, "s")?;
+            let most = defaults::MAX_FIXED_FRACTION * dt_limit;
+            if dt > most {
+                return Err(ctx.err(
+                    "simulation.dt",
+                    format!(
+                        "{dt:e} s is above the stable limit: the estimate is {dt_limit:.3e} s \
+                         (keep dt <= {most:.3e} s, or write dt = \"auto\")"
+                    ),
+                ));
+            }
+            Ok(dt)
+        }
+    }
+}
+
+/// The step (s) and steps per frame: frames fall exactly on steps, and the step is at most
+/// `wanted` (s).
+pub(super) fn fit_to_frames(duration: f64, frames: usize, wanted: f64) -> (f64, u64) {
+    let frame_dt = duration / frames as f64;
+    let steps_per_frame = (frame_dt / wanted).ceil().max(1.0) as u64;
+    (frame_dt / steps_per_frame as f64, steps_per_frame)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_fall_on_steps_and_the_step_never_grows() {
+        let (dt, n) = fit_to_frames(1.0, 10, 0.03);
+        // 0.1 s per frame at most 0.03 s per step: 4 steps of 0.025 s.
+        assert_eq!(n, 4);
+        assert!((dt - 0.025).abs() < 1e-15);
+        let (dt, n) = fit_to_frames(1.0, 10, 1.0);
+        assert_eq!((dt, n), (0.1, 1));
+    }
+}

@@ -1,0 +1,325 @@
+//! End-to-end tests of `perifrac run`: a tiny version of the default scene runs, its frames
+//! parse, crack faces appear, it ends in several closed fragments with its mass intact, and a
+//! second run writes identical files; bad scenes are refused with one message and nothing
+//! written; an instability mid-run keeps the frames written before it.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use common::{fails, ok, perifrac};
+use perifrac_io::{read_ply_crack, read_ply_points};
+
+/// The default scene with fewer cells and frames, written into `dir`; everything else (glass,
+/// ball, duration) is the default scene's.
+fn tiny_wall(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("data/scenes/wall.toml")).unwrap();
+    let tiny = text.replace("cells = [24, 24, 3]", "cells = [12, 12, 2]");
+    assert_ne!(
+        tiny, text,
+        "wall.toml no longer has the cells line this test shrinks"
+    );
+    let path = dir.join("tiny_wall.toml");
+    std::fs::write(&path, tiny).unwrap();
+    path
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn manifest(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("run.json")).unwrap();
+    serde_json::from_str(&text).unwrap()
+}
+
+/// Every file under `dir` (relative path -> bytes).
+fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.insert(
+                    p.strip_prefix(dir).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                );
+            }
+        }
+    }
+    out
+}
+
+/// Connected components of a triangle surface through shared vertices: component id per face.
+fn components(faces: &[[u32; 3]], vertices: usize) -> (usize, Vec<usize>) {
+    let mut parent: Vec<usize> = (0..vertices).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for f in faces {
+        for k in 1..3 {
+            let (a, b) = (
+                find(&mut parent, f[0] as usize),
+                find(&mut parent, f[k] as usize),
+            );
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    let mut id = vec![usize::MAX; vertices];
+    let mut count = 0;
+    let of_face = faces
+        .iter()
+        .map(|f| {
+            let r = find(&mut parent, f[0] as usize);
+            if id[r] == usize::MAX {
+                id[r] = count;
+                count += 1;
+            }
+            id[r]
+        })
+        .collect();
+    (count, of_face)
+}
+
+#[test]
+fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tiny_wall(tmp.path());
+    let out = tmp.path().join("out");
+    let args = [
+        "run",
+        s(&scene),
+        "-o",
+        s(&out),
+        "--frames",
+        "6",
+        "--threads",
+        "2",
+    ];
+    ok(&args);
+
+    let run = manifest(&out);
+    assert_eq!(run["format"], "perifrac-run/1");
+    assert_eq!(run["finished"], true);
+    assert!(run["error"].is_null());
+    let frames = run["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 7, "the initial frame and 6 more");
+    let total_mass = run["mass"].as_f64().unwrap();
+    // 0.6 x 0.6 x 0.06 m of glass at 2200 kg/m^3.
+    assert!((total_mass / 47.52 - 1.0).abs() < 1e-12, "{total_mass}");
+
+    for f in frames {
+        // Every frame parses: the surface with its crack flags, the particles with their mass.
+        let (surface, crack) = read_ply_crack(&out.join(f["surface"].as_str().unwrap())).unwrap();
+        let crack = crack.expect("surfaces carry the crack flag");
+        assert_eq!(crack.len(), surface.faces.len());
+        let povray = std::fs::read_to_string(out.join(f["povray"].as_str().unwrap())).unwrap();
+        assert!(povray.contains("mesh2"), "frame {}", f["index"]);
+        let particles = read_ply_points(&out.join(f["particles"].as_str().unwrap())).unwrap();
+        assert_eq!(
+            particles.points.len(),
+            run["particles"].as_u64().unwrap() as usize
+        );
+        // Nothing is lost: the particle masses (stored as f32, 6e-8 relative each) still add up
+        // to the scene's mass at every frame.
+        let mass: f64 = particles.scalar("mass").unwrap().iter().sum();
+        assert!(
+            (mass / total_mass - 1.0).abs() < 1e-6,
+            "frame {}: {mass}",
+            f["index"]
+        );
+        let damage = particles.scalar("damage").unwrap();
+        assert!(damage.iter().all(|d| (0.0..=1.0).contains(d)));
+    }
+
+    // The last frame: cracks, several fragments, each with a closed, outward surface.
+    let last = frames.last().unwrap();
+    let (surface, crack) = read_ply_crack(&out.join(last["surface"].as_str().unwrap())).unwrap();
+    let crack = crack.unwrap();
+    let crack_faces = crack.iter().filter(|&&c| c != 0).count();
+    assert!(crack_faces > 0, "no crack faces in the last frame");
+    assert_eq!(
+        crack_faces as u64,
+        last["crack_triangles"].as_u64().unwrap()
+    );
+    let (count, of_face) = components(&surface.faces, surface.vertices.len());
+    assert_eq!(count as u64, last["fragments"].as_u64().unwrap());
+    assert!(count > 1, "the wall did not break: {count} fragment(s)");
+    let mut balance = vec![BTreeMap::<(u32, u32), i32>::new(); count];
+    let mut volume = vec![0.0f64; count];
+    for (f, &c) in surface.faces.iter().zip(&of_face) {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            let (key, d) = if a < b { ((a, b), 1) } else { ((b, a), -1) };
+            *balance[c].entry(key).or_default() += d;
+        }
+        let [p, q, r] = f.map(|v| surface.vertices[v as usize]);
+        volume[c] += (p[0] * (q[1] * r[2] - q[2] * r[1]) - p[1] * (q[0] * r[2] - q[2] * r[0])
+            + p[2] * (q[0] * r[1] - q[1] * r[0]))
+            / 6.0;
+    }
+    for (c, b) in balance.iter().enumerate() {
+        assert!(b.values().all(|&d| d == 0), "fragment {c} is not closed");
+        assert!(volume[c] > 0.0, "fragment {c} is inside out: {}", volume[c]);
+    }
+
+    // A second run with the same scene and thread count writes the same bytes.
+    let again = tmp.path().join("again");
+    let mut args2 = args;
+    args2[3] = s(&again);
+    ok(&args2);
+    let (a, b) = (files(&out), files(&again));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (name, bytes) in &a {
+        assert!(
+            bytes == &b[name],
+            "{} differs between two runs",
+            name.display()
+        );
+    }
+}
+
+#[test]
+fn output_directory_is_refused_when_not_empty_and_force_keeps_foreign_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tiny_wall(tmp.path());
+    let out = tmp.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let err = fails(&["run", s(&scene), "-o", s(&out), "--frames", "1"]);
+    assert!(
+        err.contains("is not empty") && err.contains("--force"),
+        "{err}"
+    );
+    assert!(!out.join("run.json").exists());
+    ok(&["run", s(&scene), "-o", s(&out), "--frames", "1", "--force"]);
+    assert!(out.join("run.json").is_file());
+    assert_eq!(
+        std::fs::read_to_string(out.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+/// A scene that must be refused: (what it changes in the tiny wall, what the message says).
+const BAD_SCENES: &[(&str, &str, &str, &str)] = &[
+    (
+        "unknown key",
+        "density = 2200.0",
+        "density = 2200.0\ndensty = 2200.0",
+        "unknown field `densty`",
+    ),
+    (
+        "wrong type",
+        "density = 2200.0",
+        "density = \"heavy\"",
+        "invalid type",
+    ),
+    (
+        "missing mesh",
+        "primitive = \"box\"",
+        "file = \"no_such_mesh.mesh\"",
+        "no_such_mesh.mesh not found",
+    ),
+    (
+        "negative density",
+        "density = 2200.0",
+        "density = -2200.0",
+        "material[0].density: -2200 kg/m^3 must be positive",
+    ),
+    (
+        "collider inside the object",
+        "center = [0.3, 0.3, 0.12]",
+        "center = [0.3, 0.3, 0.03]",
+        "collider inside the object at the start",
+    ),
+    (
+        "time step above the stable limit",
+        "dt = \"auto\"",
+        "dt = 1e-3",
+        "simulation.dt: 1e-3 s is above the stable limit",
+    ),
+];
+
+#[test]
+fn bad_scenes_get_one_clear_message_and_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(tiny_wall(tmp.path())).unwrap();
+    for (what, from, to, expect) in BAD_SCENES {
+        let text = good.replacen(from, to, 1);
+        assert_ne!(text, good, "{what}: `{from}` is not in the scene");
+        let scene = tmp.path().join("bad.toml");
+        std::fs::write(&scene, &text).unwrap();
+        let out = tmp.path().join("out");
+        let err = fails(&["run", s(&scene), "-o", s(&out)]);
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{what}: one message expected:\n{err}");
+        assert!(lines[0].starts_with("error: "), "{what}: {err}");
+        assert!(
+            lines[0].contains("bad.toml"),
+            "{what}: names the file: {err}"
+        );
+        assert!(
+            err.contains(expect),
+            "{what}: expected `{expect}` in:\n{err}"
+        );
+        assert!(!out.exists(), "{what}: the output directory was created");
+    }
+    // Syntax errors point at the line and column: `densty` is the first word of its line.
+    let text = good.replacen("density = 2200.0", "density = 2200.0\ndensty = 2200.0", 1);
+    let line = text.lines().position(|l| l.starts_with("densty")).unwrap() + 1;
+    std::fs::write(tmp.path().join("bad.toml"), &text).unwrap();
+    let err = fails(&["run", s(&tmp.path().join("bad.toml")), "-o", "unused"]);
+    assert!(err.contains(&format!("bad.toml:{line}:1: ")), "{err}");
+}
+
+#[test]
+fn an_instability_mid_run_stops_with_a_message_and_keeps_the_frames() {
+    // A runaway load: gravity of 2e7 m/s^2 accelerates the slab until, after about 0.45 ms, a
+    // particle moves further in one step than the blow-up guard allows (half a horizon). The
+    // stable-step estimate cannot see it coming (gravity adds no stiffness), so the run starts
+    // and writes frames 0 to 4 (0.1 ms apart) before it stops.
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(tiny_wall(tmp.path())).unwrap();
+    let text = text.replacen(
+        "duration = 0.005",
+        "duration = 0.001\ngravity = [0.0, 0.0, -2e7]",
+        1,
+    );
+    let scene = tmp.path().join("unstable.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = tmp.path().join("out");
+    let out_arg = out.to_str().unwrap();
+    let res = perifrac(&["run", s(&scene), "-o", out_arg, "--frames", "10"]);
+    assert!(!res.status.success());
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("stopped at t ="), "{err}");
+    assert!(err.contains("frames written so far are in"), "{err}");
+    let run = manifest(&out);
+    assert_eq!(run["finished"], false);
+    let message = run["error"].as_str().expect("run.json records the error");
+    assert!(message.contains("unstable at step"), "{message}");
+    // The message on stderr is the one in run.json, said once.
+    assert_eq!(err.matches("unstable at step").count(), 1, "{err}");
+    let frames = run["frames"].as_array().unwrap();
+    assert!(
+        (2..10).contains(&frames.len()),
+        "frames before the instability: {}",
+        frames.len()
+    );
+    for f in frames {
+        assert!(out.join(f["surface"].as_str().unwrap()).is_file());
+    }
+}
