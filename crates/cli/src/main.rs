@@ -3,6 +3,7 @@
 //! Each subcommand lives in its own module; this file only parses arguments and reports
 //! errors with their context and a non-zero exit.
 
+mod bench;
 mod convert;
 mod info;
 mod load;
@@ -67,6 +68,8 @@ enum Command {
     Run(run::RunArgs),
     /// Write a POV-Ray scene per frame of a run directory, and PNGs when povray is installed.
     Render(render::RenderArgs),
+    /// Measure accuracy against references, stability on hard cases, and speed.
+    Bench(bench::BenchArgs),
     /// Summarise a tet mesh: counts, volume, edge length, quality, pieces, problems.
     Info {
         /// Tet mesh file.
@@ -105,6 +108,7 @@ fn main() -> ExitCode {
         Command::Info { mesh, json } => info::run(&mesh, json),
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

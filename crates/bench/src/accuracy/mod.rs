@@ -1,0 +1,128 @@
+//! `perifrac bench accuracy`: peridynamic runs against references, over resolution and
+//! horizon sweeps. Every case shares geometry, material, loads and boundary conditions with its
+//! reference, and every reference is shown converged in its own table.
+
+mod cantilever;
+mod motion;
+mod waves;
+
+use crate::plot::{Plot, Series};
+use crate::table::Table;
+use crate::{BenchError, Effort};
+
+pub use cantilever::{cantilever, EULER_BERNOULLI, SCIKIT_FEM, TIMOSHENKO};
+pub use motion::{swing, twist};
+pub use waves::{moduli, wave_speed};
+
+/// The horizon factors every peridynamic sweep runs (the 1.0, 1.5, 2.0).
+pub const HORIZON_FACTORS: [f64; 3] = [1.0, 1.5, 2.0];
+
+/// One run of one method at one resolution.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Run {
+    /// `"PD"`, `"FEM P1"`, `"FEM P2"`, ...
+    pub method: String,
+    /// Cells, e.g. `"40x4x4"`.
+    pub resolution: String,
+    /// Horizon factor `k` of a peridynamic run.
+    pub horizon_factor: Option<f64>,
+    /// Wall time of the run, setup included (s).
+    pub wall_s: f64,
+    /// Time steps (0 for a static solve).
+    pub steps: u64,
+    /// Directed bonds (peridynamics) or unknowns (FEM).
+    pub size: usize,
+    /// The measured quantity, in the case's unit.
+    pub value: f64,
+    /// Relative error against the case's reference.
+    pub error: f64,
+}
+
+/// What a case reports: prose, a table of runs, a plot of error against wall time.
+#[derive(Debug, Clone)]
+pub struct CaseReport {
+    /// Short name, used for file names (`cantilever`).
+    pub name: String,
+    /// Title for the report.
+    pub title: String,
+    /// Markdown paragraphs: what is measured, the reference and its convergence.
+    pub text: String,
+    /// The runs as a table.
+    pub table: Table,
+    /// The runs as a plot.
+    pub plot: Plot,
+    /// The runs.
+    pub runs: Vec<Run>,
+}
+
+/// The accuracy cases by name, in report order.
+pub const CASES: [&str; 5] = ["cantilever", "swing", "twist", "moduli", "wave_speed"];
+
+/// Runs the accuracy cases at `effort` (those named in `only`, or all), telling `progress`
+/// what starts.
+pub fn run_all(
+    effort: Effort,
+    only: &[String],
+    progress: &mut dyn FnMut(&str),
+) -> Result<Vec<CaseReport>, BenchError> {
+    let mut out = Vec::new();
+    for name in CASES {
+        if !only.is_empty() && !only.iter().any(|o| o == name) {
+            continue;
+        }
+        out.push(match name {
+            "cantilever" => cantilever(effort, progress)?,
+            "swing" => swing(effort, progress)?,
+            "twist" => twist(effort, progress)?,
+            "moduli" => moduli(effort, progress)?,
+            _ => wave_speed(effort, progress)?,
+        });
+    }
+    Ok(out)
+}
+
+/// The table and plot of `runs`: one row each; one curve per method (and horizon factor).
+pub(crate) fn table_and_plot(title: &str, unit: &str, runs: &[Run]) -> (Table, Plot) {
+    let mut table = Table::new(&[
+        "method",
+        "cells",
+        "k",
+        "wall time (s)",
+        "steps",
+        "bonds / unknowns",
+        &format!("value ({unit})"),
+        "error",
+    ]);
+    let mut series: Vec<Series> = Vec::new();
+    for r in runs {
+        table.push(vec![
+            r.method.clone(),
+            r.resolution.clone(),
+            r.horizon_factor.map_or("-".into(), |k| format!("{k:.1}")),
+            format!("{:.2}", r.wall_s),
+            r.steps.to_string(),
+            r.size.to_string(),
+            format!("{:.6e}", r.value),
+            format!("{:+.2}%", 100.0 * r.error),
+        ]);
+        let name = match r.horizon_factor {
+            Some(k) => format!("{} k = {k:.1}", r.method),
+            None => r.method.clone(),
+        };
+        let point = (r.wall_s, r.error.abs());
+        match series.iter_mut().find(|s| s.name == name) {
+            Some(s) => s.points.push(point),
+            None => series.push(Series {
+                name,
+                points: vec![point],
+            }),
+        }
+    }
+    let plot = Plot {
+        title: format!("{title}: error against wall time"),
+        x_label: "wall time (s)".into(),
+        y_label: "|relative error|".into(),
+        series,
+    };
+    (table, plot)
+}

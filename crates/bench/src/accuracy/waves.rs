@@ -1,0 +1,255 @@
+//! Elastic constants as the particles see them: Young's modulus and Poisson's ratio measured in
+//! uniaxial tension, and the speed of a pulse along a free bar. The material is the
+//! cantilever's (E = 1e8 Pa, nu = 0.3, rho = 1000 kg/m^3); the references are exact: a bar in
+//! uniaxial tension has a uniform strain away from its ends, and a pulse much longer than the
+//! section travels at `sqrt(E / rho)` (Rayleigh-Love: slower by `nu^2 k^2 r_g^2 / 2`, 0.12% for
+//! this pulse).
+
+use std::time::Instant;
+
+use perifrac_physics::{ChenMaterial, ChenModel, Explicit, Loads};
+
+use super::{table_and_plot, CaseReport, Run, HORIZON_FACTORS};
+use crate::bar::{block, fit_line, Body};
+use crate::{BenchError, Effort};
+
+const YOUNG: f64 = 1e8;
+const POISSON: f64 = 0.3;
+const DENSITY: f64 = 1000.0;
+const SIDE: f64 = 0.1;
+
+/// A `len` x 0.1 x 0.1 m bar of the cases' material from the origin, `nx` cells along and
+/// `nx / per_cell_across` across.
+fn bar(
+    case: &str,
+    len: f64,
+    nx: usize,
+    per_cell_across: usize,
+    k: f64,
+) -> Result<Body, BenchError> {
+    let material = ChenMaterial::from_young_poisson(YOUNG, POISSON, DENSITY).map_err(|source| {
+        BenchError::Physics {
+            case: case.into(),
+            source,
+        }
+    })?;
+    let n = (nx / per_cell_across).max(1);
+    block(case, [len, SIDE, SIDE], [nx, n, n], k, &material)
+}
+
+/// Measured `(E / E0, nu)` and the run's cost: a 0.4 x 0.1 x 0.1 m bar of `nx` cells along,
+/// both end layers (one horizon deep) anchored, one pulled to 0.1% strain, relaxed with
+/// critical damping of the first axial mode over 40 of its time constants. Strains are fitted
+/// over the middle third; the stress is the pulled anchor's reaction over the section.
+fn tension(nx: usize, k: f64) -> Result<(f64, f64, Run), BenchError> {
+    let started = Instant::now();
+    let len = 0.4;
+    let n = (nx / 4).max(1);
+    let case = format!("tension PD {nx}x{n}x{n} k={k}");
+    let b = bar(&case, len, nx, 4, k)?;
+    let delta = b.horizon;
+    let (bonds, rest) = (b.bonds, b.rest.clone());
+    let left = b.select(|x| x[0] < delta);
+    let right = b.select(|x| x[0] > len - delta);
+    let omega1 = std::f64::consts::PI * (YOUNG / DENSITY).sqrt() / len;
+    let physics = |source| BenchError::Physics {
+        case: case.clone(),
+        source,
+    };
+    let mut loads = Loads::new(rest.len())
+        .with_damping(2.0 * omega1)
+        .map_err(physics)?;
+    loads.anchor(&left, [0.0; 3]).map_err(physics)?;
+    loads.anchor(&right, [0.0; 3]).map_err(physics)?;
+    let mut s = b.solver(&case, loads)?;
+    // Start from the affine answer with the nominal contraction; the relaxation finds the rest.
+    let eps = 1e-3;
+    let c = SIDE / 2.0;
+    let start: Vec<[f64; 3]> = rest
+        .iter()
+        .map(|p| {
+            [
+                p[0] + eps * p[0].clamp(delta, len - delta),
+                p[1] - POISSON * eps * (p[1] - c),
+                p[2] - POISSON * eps * (p[2] - c),
+            ]
+        })
+        .collect();
+    s.set_positions(&start);
+    let steps = (40.0 / omega1 / s.dt()).ceil() as u64;
+    for _ in 0..steps {
+        s.step().map_err(physics)?;
+    }
+    let y = s.positions();
+    let mid: Vec<usize> = (0..rest.len())
+        .filter(|&i| (rest[i][0] - len / 2.0).abs() < len / 6.0)
+        .collect();
+    let slope = |d: usize| {
+        let u: Vec<f64> = mid.iter().map(|&i| y[i][d] - rest[i][d]).collect();
+        let x: Vec<f64> = mid.iter().map(|&i| rest[i][d]).collect();
+        fit_line(&x, &u).1
+    };
+    let exx = slope(0);
+    let eyy = 0.5 * (slope(1) + slope(2));
+    let reaction: f64 = right.iter().map(|&i| s.forces()[i as usize][0]).sum();
+    let stress = -reaction / (SIDE * SIDE);
+    let run = Run {
+        method: String::new(),
+        resolution: format!("{nx}x{n}x{n}"),
+        horizon_factor: Some(k),
+        wall_s: started.elapsed().as_secs_f64(),
+        steps,
+        size: bonds,
+        value: 0.0,
+        error: 0.0,
+    };
+    Ok((stress / exx / YOUNG, -eyy / exx, run))
+}
+
+/// The moduli case: E and nu from uniaxial tension over the sweep.
+pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseReport, BenchError> {
+    let (levels, factors): (&[usize], &[f64]) = match effort {
+        Effort::Tiny => (&[16], &[1.5]),
+        Effort::Full => (&[16, 24, 32], &HORIZON_FACTORS),
+    };
+    let mut runs = Vec::new();
+    for &k in factors {
+        for &nx in levels {
+            progress(&format!(
+                "moduli: uniaxial tension at {nx} cells along, k = {k}"
+            ));
+            let (e, nu, run) = tension(nx, k)?;
+            runs.push(Run {
+                method: "PD E".into(),
+                value: e * YOUNG,
+                error: e - 1.0,
+                ..run.clone()
+            });
+            runs.push(Run {
+                method: "PD nu".into(),
+                value: nu,
+                error: nu / POISSON - 1.0,
+                ..run
+            });
+        }
+    }
+    let (table, plot) = table_and_plot("Moduli from uniaxial tension", "Pa or 1", &runs);
+    let text = format!(
+        "Young's modulus and Poisson's ratio measured on a 0.4 x 0.1 x 0.1 m bar in uniaxial \
+         tension (0.1% strain, both end layers one horizon deep held, relaxed with critical \
+         damping of the first axial mode): the stress is the pulled layer's reaction over the \
+         section, the strains are fitted over the middle third. The reference is the input, \
+         E = {YOUNG:e} Pa and nu = {POISSON}; the two rows of a run share its cost. A section of \
+         4 to 8 cells is 2 to 5 horizons across, so the particles near the surface, whose \
+         families are cut, weigh in (calibration makes them stiffer, MODEL.md's constants \
+         softer: docs/DECISIONS.md)."
+    );
+    Ok(CaseReport {
+        name: "moduli".into(),
+        title: "Young's modulus and Poisson's ratio".into(),
+        text,
+        table,
+        plot,
+        runs,
+    })
+}
+
+/// Mean axial velocity (m/s) of the particles `set`.
+fn mean_vx(s: &Explicit<ChenModel>, set: &[u32]) -> f64 {
+    set.iter()
+        .map(|&i| s.velocities()[i as usize][0])
+        .sum::<f64>()
+        / set.len() as f64
+}
+
+/// Time (s) at which `history` (sampled every `dt`) first reaches half its peak, interpolated.
+fn half_peak_arrival(history: &[f64], dt: f64) -> f64 {
+    let peak = history.iter().cloned().fold(f64::MIN, f64::max);
+    let k = history
+        .iter()
+        .position(|&v| v >= 0.5 * peak)
+        .unwrap_or(history.len() - 1)
+        .max(1);
+    let (a, b) = (history[k - 1], history[k]);
+    (k as f64 - 1.0 + (0.5 * peak - a) / (b - a)) * dt
+}
+
+/// Measured speed over `sqrt(E / rho)` and the run's cost: a free 2 x 0.1 x 0.1 m bar of `nx`
+/// cells along, a half-Gaussian axial velocity (sigma 0.25 m) at its end x = 0, arrival of
+/// the leading edge at half its peak at x = 0.6 and 1.4 m.
+fn pulse(nx: usize, k: f64) -> Result<Run, BenchError> {
+    let started = Instant::now();
+    let len = 2.0;
+    let n = (nx / 20).max(1);
+    let h = len / nx as f64;
+    let case = format!("wave PD {nx}x{n}x{n} k={k}");
+    let b = bar(&case, len, nx, 20, k)?;
+    let bonds = b.bonds;
+    let probe = |at: f64| b.select(move |x| (x[0] - at).abs() < 0.5 * h);
+    let (p1, p2) = (probe(0.6), probe(1.4));
+    let rest = b.rest.clone();
+    let mut s = b.solver(&case, Loads::new(rest.len()))?;
+    let sigma = 0.25;
+    for (v, p) in s.velocities_mut().iter_mut().zip(&rest) {
+        v[0] = (-0.5 * (p[0] / sigma).powi(2)).exp();
+    }
+    let c0 = (YOUNG / DENSITY).sqrt();
+    let steps = (0.9 * len / c0 / s.dt()).ceil() as u64;
+    let (mut h1, mut h2) = (vec![mean_vx(&s, &p1)], vec![mean_vx(&s, &p2)]);
+    for _ in 0..steps {
+        s.step().map_err(|source| BenchError::Physics {
+            case: case.clone(),
+            source,
+        })?;
+        h1.push(mean_vx(&s, &p1));
+        h2.push(mean_vx(&s, &p2));
+    }
+    let dt = s.dt();
+    let speed = 0.8 / (half_peak_arrival(&h2, dt) - half_peak_arrival(&h1, dt));
+    Ok(Run {
+        method: "PD".into(),
+        resolution: format!("{nx}x{n}x{n}"),
+        horizon_factor: Some(k),
+        wall_s: started.elapsed().as_secs_f64(),
+        steps,
+        size: bonds,
+        value: speed,
+        error: speed / c0 - 1.0,
+    })
+}
+
+/// The wave-speed case over the sweep.
+pub fn wave_speed(
+    effort: Effort,
+    progress: &mut dyn FnMut(&str),
+) -> Result<CaseReport, BenchError> {
+    let (levels, factors): (&[usize], &[f64]) = match effort {
+        Effort::Tiny => (&[40], &[1.5]),
+        Effort::Full => (&[40, 80, 120], &HORIZON_FACTORS),
+    };
+    let mut runs = Vec::new();
+    for &k in factors {
+        for &nx in levels {
+            progress(&format!("wave speed: pulse at {nx} cells along, k = {k}"));
+            runs.push(pulse(nx, k)?);
+        }
+    }
+    let (table, plot) = table_and_plot("Bar wave speed", "m/s", &runs);
+    let text = format!(
+        "A smooth pulse (half-Gaussian axial velocity, sigma = 0.25 m) started at the free end \
+         of a free 2 x 0.1 x 0.1 m bar; its leading edge is timed at half its peak at x = 0.6 \
+         and 1.4 m. The reference is the bar speed sqrt(E / rho) = {:.3} m/s; the pulse is long \
+         enough that its own dispersion in a continuum (Rayleigh-Love) is 0.12%, and its \
+         wavelengths are above the 12 horizons where the model's dispersion stays under 1% \
+         (MODEL.md section 2).",
+        (YOUNG / DENSITY).sqrt()
+    );
+    Ok(CaseReport {
+        name: "wave_speed".into(),
+        title: "Bar wave speed".into(),
+        text,
+        table,
+        plot,
+        runs,
+    })
+}

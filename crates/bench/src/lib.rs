@@ -1,0 +1,31 @@
+//! Speed against error for perifrac: `perifrac bench accuracy | stability | speed`.
+//!
+//! [`accuracy`] runs peridynamic cases beside references (closed forms and the project's own
+//! finite elements, shown converged) over resolution and horizon sweeps and reports each run's
+//! wall time, steps, bonds and error; [`stability`] runs hard cases and says whether each
+//! survived, stopped with a message or failed; [`speed`] times the force loop. Results come as
+//! [`Table`]s (Markdown) and [`Plot`]s (PNG through plotters). This crate is a harness: it uses
+//! the physics, fem, topology and contact crates and is used only by the command line.
+
+#![warn(missing_docs)]
+
+pub mod accuracy;
+mod bar;
+mod error;
+mod plot;
+pub mod speed;
+pub mod stability;
+mod table;
+
+pub use error::BenchError;
+pub use plot::{Plot, Series};
+pub use table::Table;
+
+/// How much of a benchmark to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Effort {
+    /// The smallest resolutions only, for tests of the harness itself (seconds).
+    Tiny,
+    /// The sweeps BENCHMARKS.md reports (minutes on two cores).
+    Full,
+}

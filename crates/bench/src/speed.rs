@@ -1,0 +1,266 @@
+//! `perifrac bench speed`: how fast the particles go. The bond-update rate of each material
+//! path on one core and on all of them, seconds per step at the size of the paper's glass
+//! wall, the share of a step the topology takes while a slab shatters, and memory per bond.
+//! Timings are wall clock on whatever machine runs it; the report says which.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use perifrac_physics::{
+    ChenMaterial, ChenModel, Explicit, ForceModel, FractureParams, Loads, YieldParams,
+};
+use perifrac_scene::{Scene, Setup};
+
+use crate::bar;
+use crate::table::Table;
+use crate::{BenchError, Effort};
+
+/// A material path of the Chen model.
+#[derive(Debug, Clone, Copy)]
+struct MaterialPath {
+    name: &'static str,
+    plastic: bool,
+    fracture: bool,
+    anisotropic: bool,
+}
+
+const PATHS: [MaterialPath; 5] = [
+    MaterialPath {
+        name: "elastic",
+        plastic: false,
+        fracture: false,
+        anisotropic: false,
+    },
+    MaterialPath {
+        name: "brittle (fracture)",
+        plastic: false,
+        fracture: true,
+        anisotropic: false,
+    },
+    MaterialPath {
+        name: "plastic",
+        plastic: true,
+        fracture: false,
+        anisotropic: false,
+    },
+    MaterialPath {
+        name: "ductile (plastic + fracture)",
+        plastic: true,
+        fracture: true,
+        anisotropic: false,
+    },
+    MaterialPath {
+        name: "anisotropic elastic",
+        plastic: false,
+        fracture: false,
+        anisotropic: true,
+    },
+];
+
+fn material(p: MaterialPath) -> ChenMaterial {
+    let mut m = ChenMaterial::from_young_poisson(70e9, 0.22, 2500.0).expect("valid constants");
+    if p.plastic {
+        m.plasticity = Some(YieldParams {
+            psi0: 1e30,
+            gamma_ratio: 0.2,
+        });
+    }
+    if p.fracture {
+        m.fracture = Some(FractureParams {
+            s_crit: 0.01,
+            alpha: 0.0,
+        });
+    }
+    if p.anisotropic {
+        m.anisotropy = Some([[2.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
+    }
+    m
+}
+
+/// Times `steps` explicit steps of `s` (after one untimed step); returns the mean per step.
+fn time_steps(s: &mut Explicit<ChenModel>, steps: u32, case: &str) -> Result<Duration, BenchError> {
+    let physics = |source| BenchError::Physics {
+        case: case.into(),
+        source,
+    };
+    s.step().map_err(physics)?;
+    let t = Instant::now();
+    for _ in 0..steps {
+        s.step().map_err(physics)?;
+    }
+    Ok(t.elapsed() / steps)
+}
+
+/// A block of `cells` 1 cm cells of path `p`'s material, moving gently (so plastic and damage
+/// state are exercised but nothing breaks), ready to step.
+fn moving_block(
+    p: MaterialPath,
+    cells: [usize; 3],
+    case: &str,
+) -> Result<(Explicit<ChenModel>, usize), BenchError> {
+    let size = cells.map(|c| c as f64 * 0.01);
+    let b = bar::block(case, size, cells, 1.45, &material(p))?;
+    let bonds = b.bonds;
+    let rest = b.rest.clone();
+    let mut s = b.solver(case, Loads::new(rest.len()))?;
+    for (v, x) in s.velocities_mut().iter_mut().zip(&rest) {
+        *v = [1e-3 * x[1], -1e-3 * x[0], 0.0];
+    }
+    Ok((s, bonds))
+}
+
+fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, BenchError> {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| BenchError::Mesh {
+            case: "a one-thread pool".into(),
+            message: e.to_string(),
+        })?;
+    Ok(pool.install(f))
+}
+
+/// Bond updates per second of every material path, on one thread and on the global pool, and
+/// bytes per bond.
+pub fn paths(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let (cells, steps): ([usize; 3], u32) = match effort {
+        Effort::Tiny => ([8, 8, 8], 3),
+        Effort::Full => ([40, 40, 10], 10),
+    };
+    let threads = rayon::current_num_threads();
+    let mut t = Table::new(&[
+        "material path",
+        "particles",
+        "bonds",
+        "s/step, 1 thread",
+        "M bond updates/s, 1 thread",
+        &format!("s/step, {threads} threads"),
+        &format!("M bond updates/s, {threads} threads"),
+        "bytes per bond",
+    ]);
+    for p in PATHS {
+        progress(&format!("speed: {} on {cells:?} cells", p.name));
+        let case = format!("speed {}", p.name);
+        let (mut s, bonds) = moving_block(p, cells, &case)?;
+        let bytes = s.model().memory_bytes() as f64 / bonds as f64;
+        let n = s.positions().len();
+        let all = time_steps(&mut s, steps, &case)?;
+        let (mut s1, _) = moving_block(p, cells, &case)?;
+        let one = one_thread(move || time_steps(&mut s1, steps, &case))??;
+        let rate = |d: Duration| bonds as f64 / d.as_secs_f64() / 1e6;
+        t.push(vec![
+            p.name.into(),
+            n.to_string(),
+            bonds.to_string(),
+            format!("{:.4}", one.as_secs_f64()),
+            format!("{:.1}", rate(one)),
+            format!("{:.4}", all.as_secs_f64()),
+            format!("{:.1}", rate(all)),
+            format!("{bytes:.1}"),
+        ]);
+    }
+    Ok(t)
+}
+
+/// Seconds per step of a glass wall of the paper's size (Table 1: 3.0e5 particles, 5.0e7
+/// bonds at delta = 1.45 lambda): 100 x 100 x 5 cells of a 1 x 1 x 0.05 m wall.
+pub fn glass_wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let (cells, steps): ([usize; 3], u32) = match effort {
+        Effort::Tiny => ([20, 20, 2], 2),
+        Effort::Full => ([100, 100, 5], 5),
+    };
+    progress(&format!("speed: glass wall of {cells:?} cells"));
+    let case = "speed glass wall";
+    let started = Instant::now();
+    let size = [1.0, 1.0, 0.05 * cells[2] as f64 / 5.0];
+    let mut glass = ChenMaterial::elastic(3.3e10, 2.0e10, 2200.0);
+    glass.fracture = Some(FractureParams {
+        s_crit: 0.0005,
+        alpha: 0.0,
+    });
+    let b = bar::block(case, size, cells, 1.45, &glass)?;
+    let (n, bonds) = (b.rest.len(), b.bonds);
+    let mut s = b.solver(case, Loads::new(n))?;
+    let setup = started.elapsed();
+    let bytes = s.model().memory_bytes();
+    let per_step = time_steps(&mut s, steps, case)?;
+    let mut t = Table::new(&[
+        "particles",
+        "bonds",
+        "setup (s)",
+        &format!("s/step ({} threads)", rayon::current_num_threads()),
+        "model memory (MB)",
+        "paper (s/step)",
+    ]);
+    t.push(vec![
+        n.to_string(),
+        bonds.to_string(),
+        format!("{:.1}", setup.as_secs_f64()),
+        format!("{:.3}", per_step.as_secs_f64()),
+        format!("{:.0}", bytes as f64 / 1e6),
+        "~2.4 (3.0e5 particles, 5.0e7 bonds, 6-core i7, OpenMP)".into(),
+    ]);
+    Ok(t)
+}
+
+/// The share of each stage of the driver's step while a glass slab is shot to pieces: the
+/// default scene's slab and ball at 150 m/s, stepped for `steps` steps from the impact on.
+pub fn fracture_share(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let cells = match effort {
+        Effort::Tiny => [12, 12, 2],
+        Effort::Full => [36, 36, 4],
+    };
+    progress(&format!(
+        "speed: stage shares while a slab of {cells:?} cells shatters"
+    ));
+    let text = format!(
+        "[mesh]\nprimitive = \"box\"\nsize = [0.6, 0.6, 0.06]\ncells = [{}, {}, {}]\n\n\
+         [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
+         s_crit = 0.0005\n\n[simulation]\nduration = 0.001\n\n\
+         [[ball]]\ncenter = [0.3, 0.3, 0.111]\nradius = 0.05\nvelocity = [0.0, 0.0, -150.0]\n\n\
+         [output]\nframes = 1\n",
+        cells[0], cells[1], cells[2]
+    );
+    let scene =
+        Scene::parse(&text, Path::new("fracture-share.toml")).map_err(|e| BenchError::Mesh {
+            case: "fracture share".into(),
+            message: e.to_string(),
+        })?;
+    let mut setup = Setup::new(&scene, None).map_err(|e| BenchError::Mesh {
+        case: "fracture share".into(),
+        message: e.to_string(),
+    })?;
+    let steps = setup.frames as u64 * setup.steps_per_frame;
+    let mut crack_faces = 0;
+    for _ in 0..steps {
+        let r = setup.driver.step().map_err(|source| BenchError::Physics {
+            case: "fracture share".into(),
+            source,
+        })?;
+        crack_faces += r.crack_faces;
+    }
+    let st = setup.driver.stage_times();
+    let total = st.physics + st.topology + st.advect;
+    let share = |d: Duration| format!("{:.2}%", 100.0 * d.as_secs_f64() / total.as_secs_f64());
+    let mut t = Table::new(&[
+        "particles",
+        "steps",
+        "bonds broken",
+        "crack faces",
+        "physics + contact",
+        "topology (crack faces, splitting)",
+        "advection",
+        "ms/step",
+    ]);
+    t.push(vec![
+        setup.info.particles.to_string(),
+        steps.to_string(),
+        setup.driver.broken_bonds().to_string(),
+        crack_faces.to_string(),
+        share(st.physics),
+        share(st.topology),
+        share(st.advect),
+        format!("{:.2}", 1e3 * total.as_secs_f64() / steps as f64),
+    ]);
+    Ok(t)
+}

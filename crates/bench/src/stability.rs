@@ -1,0 +1,605 @@
+//! `perifrac bench stability`: hard cases, each ending in one of three outcomes: it survived
+//! (finite, bounded energy), it stopped with a message (the blow-up guard or a setup error),
+//! or it failed: a NaN that nothing caught or a panic ([`Outcome::Failed`], a defect), or
+//! energy that grew without the guard stopping it yet ([`Outcome::Runaway`], a limit of a
+//! displacement guard). The tests of this crate run every case at [`Effort::Tiny`] and require
+//! no NaN and no panic.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::Path;
+use std::time::Instant;
+
+use perifrac_physics::{
+    max_frequency, ChenMaterial, ChenModel, Discretization, Explicit, ExplicitConfig,
+    FractureParams, Loads, TimeStep, Vec3,
+};
+use perifrac_scene::{Scene, Setup};
+use perifrac_topology::primitives::box_data;
+use perifrac_topology::TetMesh;
+
+use crate::bar::block;
+use crate::table::Table;
+use crate::{BenchError, Effort};
+
+/// How a case ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// Finite to the end, energy bounded.
+    Survived,
+    /// Stopped with this message (a guard or a refusal): the run ends cleanly.
+    Stopped(String),
+    /// A defect: an uncaught NaN or a panic.
+    Failed(String),
+    /// Energy grew without bound in an undamped run and nothing had stopped it yet.
+    Runaway(String),
+}
+
+/// One hard case's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseResult {
+    /// What was run.
+    pub name: String,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Steps taken.
+    pub steps: u64,
+    /// `(E_end - E_start) / E_start` of the total energy (kinetic plus elastic, balls
+    /// included); NaN where the case has no meaningful start energy.
+    pub energy_drift: f64,
+    /// Largest particle speed seen (m/s).
+    pub max_speed: f64,
+    /// Wall time (s).
+    pub wall_s: f64,
+    /// What to read into it.
+    pub note: String,
+}
+
+/// Energy growth beyond which an undamped run that did not stop counts as failed.
+const RUNAWAY: f64 = 1.0;
+
+fn steel() -> ChenMaterial {
+    ChenMaterial::from_young_poisson(200e9, 0.25, 7800.0).expect("valid constants")
+}
+
+fn max_speed(v: &[Vec3]) -> f64 {
+    v.iter()
+        .map(|a| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt())
+        .fold(0.0, f64::max)
+}
+
+fn all_finite(v: &[Vec3]) -> bool {
+    v.iter().all(|a| a.iter().all(|c| c.is_finite()))
+}
+
+/// Steps an explicit solver `steps` times, tracking speed and the total energy (sampled every
+/// [`ENERGY_EVERY`] steps); turns the end into an outcome. The drift compares the mean energy
+/// over the last tenth of the samples with the first tenth, so the bounded oscillation of
+/// velocity Verlet's energy (of order `(omega dt)^2` in the fastest modes) is not read as
+/// drift. `damped` runs do not fail on energy growth.
+fn drive(
+    name: &str,
+    mut s: Explicit<ChenModel>,
+    steps: u64,
+    damped: bool,
+    note: String,
+    started: Instant,
+) -> CaseResult {
+    let mut watch = Watch::new(s.kinetic_energy() + s.elastic_energy(), s.velocities());
+    for _ in 0..steps {
+        if let Err(e) = s.step() {
+            watch.outcome = Outcome::Stopped(e.to_string());
+            break;
+        }
+        if !watch.stepped(s.velocities(), s.positions()) {
+            break;
+        }
+        if watch.samples_now() {
+            watch.energy.push(s.kinetic_energy() + s.elastic_energy());
+        }
+    }
+    watch.finish(
+        name,
+        damped,
+        || s.kinetic_energy() + s.elastic_energy(),
+        note,
+        started,
+    )
+}
+
+/// Steps between energy samples.
+const ENERGY_EVERY: u64 = 10;
+
+/// What a run has seen so far: energy samples, the fastest particle, steps, the outcome.
+struct Watch {
+    energy: Vec<f64>,
+    top: f64,
+    taken: u64,
+    outcome: Outcome,
+}
+
+impl Watch {
+    fn new(energy: f64, v: &[Vec3]) -> Watch {
+        Watch {
+            energy: vec![energy],
+            top: max_speed(v),
+            taken: 0,
+            outcome: Outcome::Survived,
+        }
+    }
+
+    /// Records a step that ended at velocities `v`, positions `y`. Returns false when the run
+    /// must end (a non-finite state).
+    fn stepped(&mut self, v: &[Vec3], y: &[Vec3]) -> bool {
+        self.taken += 1;
+        self.top = self.top.max(max_speed(v));
+        if !all_finite(y) || !all_finite(v) {
+            self.outcome = Outcome::Failed("non-finite state without an error".into());
+            return false;
+        }
+        true
+    }
+
+    /// Whether this step's energy is sampled.
+    fn samples_now(&self) -> bool {
+        self.taken.is_multiple_of(ENERGY_EVERY)
+    }
+
+    /// The result; `end_energy` is sampled once more when the run survived.
+    fn finish(
+        mut self,
+        name: &str,
+        damped: bool,
+        end_energy: impl FnOnce() -> f64,
+        note: String,
+        started: Instant,
+    ) -> CaseResult {
+        if self.outcome == Outcome::Survived {
+            self.energy.push(end_energy());
+        }
+        let drift = windowed_drift(&self.energy);
+        if self.outcome == Outcome::Survived && !damped && drift > RUNAWAY {
+            self.outcome = Outcome::Runaway(format!(
+                "energy grew {:.1}-fold in {} steps and the guard had not stopped it yet",
+                1.0 + drift,
+                self.taken
+            ));
+        }
+        CaseResult {
+            name: name.into(),
+            outcome: self.outcome,
+            steps: self.taken,
+            energy_drift: drift,
+            max_speed: self.top,
+            wall_s: started.elapsed().as_secs_f64(),
+            note,
+        }
+    }
+}
+
+/// `(mean of the last tenth - mean of the second tenth) / mean of the second tenth` of the
+/// samples (at least one each; the first tenth is skipped because a start with all the energy
+/// kinetic settles into a discrete energy that differs from it by `(omega dt)^2`: a bias, not
+/// a drift); NaN without a positive reference.
+fn windowed_drift(e: &[f64]) -> f64 {
+    let w = (e.len() / 10).max(1);
+    let from = w.min(e.len() - w);
+    let first = e[from..from + w].iter().sum::<f64>() / w as f64;
+    let last = e[e.len() - w..].iter().sum::<f64>() / w as f64;
+    if first > 0.0 {
+        (last - first) / first
+    } else {
+        f64::NAN
+    }
+}
+
+/// A deterministic velocity field with every mode in it: `amplitude` (m/s) times xorshift
+/// noise in [-0.5, 0.5) per component.
+fn noise(n: usize, amplitude: f64) -> Vec<Vec3> {
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        amplitude * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+    };
+    (0..n).map(|_| [next(), next(), next()]).collect()
+}
+
+/// A free steel block of `cells` 1 cm cells at a fixed step `factor` times the estimated
+/// stable limit, with noise in the velocities.
+fn step_factor(factor: f64, cells: [usize; 3], steps: u64) -> Result<CaseResult, BenchError> {
+    let started = Instant::now();
+    let name = format!("explicit step at {factor} x the stable estimate");
+    let size = cells.map(|c| c as f64 * 0.01);
+    let mut b = block(&name, size, cells, 1.5, &steel())?;
+    let est = max_frequency(&mut b.model, &b.rest, b.horizon, 100, 1e-5);
+    let dt = factor * est.critical_step();
+    let config = ExplicitConfig {
+        dt: TimeStep::Fixed(dt),
+        guard_fraction: 0.5,
+    };
+    let n = b.rest.len();
+    let mut s =
+        Explicit::new(b.model, &b.rest, b.horizon, Loads::new(n), config).map_err(|source| {
+            BenchError::Physics {
+                case: name.clone(),
+                source,
+            }
+        })?;
+    s.velocities_mut().copy_from_slice(&noise(n, 0.1));
+    let note = format!(
+        "estimate {:.3e} s ({} power iterations); steel block of {n} particles, random velocities",
+        est.critical_step(),
+        est.iterations
+    );
+    Ok(drive(&name, s, steps, false, note, started))
+}
+
+/// A scene given as TOML text, stepped through the scene driver: `steps` steps, or to the
+/// scene's end when `None`.
+fn scene_case(name: &str, text: &str, note: &str, damped: bool, steps: Option<u64>) -> CaseResult {
+    let started = Instant::now();
+    let scene = match Scene::parse(text, Path::new(name)) {
+        Ok(s) => s,
+        Err(e) => return refused(name, e.to_string(), started),
+    };
+    let mut setup = match Setup::new(&scene, None) {
+        Ok(s) => s,
+        Err(e) => return refused(name, e.to_string(), started),
+    };
+    let energy = |d: &mut perifrac_scene::Driver| {
+        let balls = d.colliders().map_or(0.0, |c| c.kinetic_energy());
+        let s = d.solver_mut();
+        s.kinetic_energy() + s.elastic_energy() + balls
+    };
+    let mut watch = Watch::new(
+        energy(&mut setup.driver),
+        setup.driver.solver().velocities(),
+    );
+    let steps = steps.unwrap_or(setup.frames as u64 * setup.steps_per_frame);
+    for _ in 0..steps {
+        if let Err(e) = setup.driver.step() {
+            watch.outcome = Outcome::Stopped(e.to_string());
+            break;
+        }
+        let solver = setup.driver.solver();
+        if !watch.stepped(solver.velocities(), solver.positions()) {
+            break;
+        }
+        if watch.samples_now() {
+            let e = energy(&mut setup.driver);
+            watch.energy.push(e);
+        }
+    }
+    watch.finish(
+        name,
+        damped,
+        || energy(&mut setup.driver),
+        note.into(),
+        started,
+    )
+}
+
+fn refused(name: &str, message: String, started: Instant) -> CaseResult {
+    CaseResult {
+        name: name.into(),
+        outcome: Outcome::Stopped(message),
+        steps: 0,
+        energy_drift: f64::NAN,
+        max_speed: 0.0,
+        wall_s: started.elapsed().as_secs_f64(),
+        note: "refused at setup".into(),
+    }
+}
+
+/// A block of the same steel with `cells` 1 cm cells as a scene's mesh table.
+fn block_mesh(cells: [usize; 3]) -> String {
+    format!(
+        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{}, {}, {}]\n",
+        cells[0] as f64 * 0.01,
+        cells[1] as f64 * 0.01,
+        cells[2] as f64 * 0.01,
+        cells[0],
+        cells[1],
+        cells[2]
+    )
+}
+
+const STEEL: &str = "[[material]]\nyoung = 200e9\npoisson = 0.25\ndensity = 7800.0\n";
+
+fn sphere_impact(cells: [usize; 3]) -> CaseResult {
+    let size = cells.map(|c| c as f64 * 0.01);
+    let text = format!(
+        "{}{STEEL}s_crit = 0.002\n\n[simulation]\nduration = {}\n\n\
+         [[ball]]\ncenter = [{}, {}, {}]\nradius = {}\nvelocity = [0.0, 0.0, -100.0]\n\
+         density = 7800.0\n",
+        block_mesh(cells),
+        (size[2] + 0.02) / 100.0,
+        size[0] / 2.0,
+        size[1] / 2.0,
+        size[2] + 0.012,
+        0.01,
+    );
+    scene_case(
+        "100 m/s steel sphere into a steel block (fracture on)",
+        &text,
+        "dynamic 1 cm ball; bonds break, energy goes into fracture and flying pieces",
+        true,
+        None,
+    )
+}
+
+fn crush(cells: [usize; 3]) -> CaseResult {
+    let size = cells.map(|c| c as f64 * 0.01);
+    let speed = 10.0;
+    let squeeze = 0.8 * size[2] / speed;
+    let text = format!(
+        "{}{STEEL}\n[simulation]\nduration = {}\ndamping = 0.0\n\n\
+         [[anchor]]\nregion = {{ min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 0.004] }}\n\
+         [[anchor]]\nregion = {{ min = [-1.0, -1.0, {}], max = [1.0, 1.0, 1.0] }}\n\
+         velocity = [0.0, 0.0, {}]\nuntil = {squeeze}\n\n[output]\nframes = 4\n",
+        block_mesh(cells),
+        2.0 * squeeze,
+        size[2] - 0.004,
+        -speed,
+    );
+    scene_case(
+        "crush a steel block to 20% of its height, then release",
+        &text,
+        "top layer driven down at 10 m/s to 20% of the height, then let go for as long again",
+        true,
+        None,
+    )
+}
+
+fn two_materials(cells: [usize; 3], steps: u64) -> CaseResult {
+    let size = cells.map(|c| c as f64 * 0.01);
+    let text = format!(
+        "{}[[material]]\nyoung = 2e7\npoisson = 0.25\ndensity = 7800.0\n\
+         [[material]]\nyoung = 2e11\npoisson = 0.25\ndensity = 7800.0\n\
+         region = {{ min = [-1.0, -1.0, -1.0], max = [{}, 1.0, 1.0] }}\n\n\
+         [simulation]\nduration = 1.0\n\n[[velocity]]\nlinear = [0.0, 0.0, 1.0]\n\
+         region = {{ min = [{}, -1.0, -1.0], max = [1.0, 1.0, 1.0] }}\n\n[output]\nframes = 1\n",
+        block_mesh(cells),
+        size[0] / 2.0,
+        size[0] / 2.0,
+    );
+    scene_case(
+        "two materials, stiffness ratio 10,000",
+        &text,
+        "E = 2e7 and 2e11 Pa halves; the soft half starts moving at 1 m/s across the interface",
+        false,
+        Some(steps),
+    )
+}
+
+fn spinning(cells: [usize; 3], steps: u64) -> CaseResult {
+    let text = format!(
+        "{}{STEEL}\n[simulation]\nduration = 1.0\n\n[[velocity]]\nangular = [0.0, 0.0, 100.0]\n\n\
+         [output]\nframes = 1\n",
+        block_mesh(cells),
+    );
+    scene_case(
+        "a block spinning at 100 rad/s",
+        &text,
+        "rigid spin about z, free; the centrifugal stretch is tiny for steel",
+        false,
+        Some(steps),
+    )
+}
+
+/// A steel block whose interior vertices are pushed towards a neighbour so that some tets are
+/// slivers (dihedral angles near 0 and 180 degrees).
+fn slivers(cells: [usize; 3], steps: u64) -> Result<CaseResult, BenchError> {
+    let started = Instant::now();
+    let name = "an input mesh with sliver tets";
+    let size = cells.map(|c| c as f64 * 0.01);
+    let (mut v, t) = box_data([0.0; 3], size, cells);
+    let h = 0.01;
+    let mut moved = 0;
+    for p in v.iter_mut() {
+        let inside = (0..3).all(|k| p[k] > 1e-9 && p[k] < size[k] - 1e-9);
+        let parity = ((p[0] / h).round() as i64 + (p[1] / h).round() as i64) % 2 == 0;
+        if inside && parity {
+            // 49% of a cell up: the tets between it and the layer above flatten.
+            p[2] += 0.49 * h;
+            moved += 1;
+        }
+    }
+    let (mesh, _) = TetMesh::new(v, t).map_err(|e| BenchError::Mesh {
+        case: name.into(),
+        message: e.to_string(),
+    })?;
+    let q = mesh.quality();
+    let horizon = 1.5 * mesh.mean_edge_length();
+    let physics = |source| BenchError::Physics {
+        case: name.into(),
+        source,
+    };
+    let rest = mesh.rest_barycentres();
+    let (disc, _) =
+        Discretization::from_tets(&rest, &mesh.rest_volumes(), mesh.neighbours(), horizon)
+            .map_err(physics)?;
+    let model = ChenModel::new(disc, &[steel()]).map_err(physics)?;
+    let config = ExplicitConfig {
+        dt: TimeStep::Auto { safety: 0.8 },
+        guard_fraction: 0.5,
+    };
+    let n = rest.len();
+    let mut s = Explicit::new(model, &rest, horizon, Loads::new(n), config).map_err(physics)?;
+    s.velocities_mut().copy_from_slice(&noise(n, 0.1));
+    let note = format!(
+        "{moved} vertices moved; dihedral angles {:.1} to {:.1} deg, tet volumes {:.1e} to {:.1e} \
+         m^3; dt {:.2e} s",
+        q.min_dihedral_deg,
+        q.max_dihedral_deg,
+        q.min_volume,
+        q.max_volume,
+        s.dt()
+    );
+    Ok(drive(name, s, steps, false, note, started))
+}
+
+/// A block of glass flung apart so fast that every bond breaks, then stepped on: isolated
+/// particles must fly straight, not turn to NaN.
+fn isolated(cells: [usize; 3], steps: u64) -> Result<CaseResult, BenchError> {
+    let started = Instant::now();
+    let name = "fully damaged, isolated particles";
+    let size = cells.map(|c| c as f64 * 0.01);
+    let mut glass = ChenMaterial::from_young_poisson(70e9, 0.22, 2500.0).map_err(|source| {
+        BenchError::Physics {
+            case: name.into(),
+            source,
+        }
+    })?;
+    glass.fracture = Some(FractureParams {
+        s_crit: 1e-4,
+        alpha: 0.0,
+    });
+    let b = block(name, size, cells, 1.5, &glass)?;
+    let n = b.rest.len();
+    let centre = size.map(|s| s / 2.0);
+    let rest = b.rest.clone();
+    let mut s = b.solver(name, Loads::new(n))?;
+    // Radial expansion at 200 1/s: every bond is past its threshold within a few steps.
+    for (v, p) in s.velocities_mut().iter_mut().zip(&rest) {
+        *v = [0, 1, 2].map(|k| 200.0 * (p[k] - centre[k]));
+    }
+    let bonds = s.model().discretization().family().num_bonds();
+    let mut result = drive(name, s, steps, true, String::new(), started);
+    result.note = format!(
+        "radial velocity 200 r (1/s) breaks the bonds; then the particles fly free ({bonds} \
+         directed bonds at the start)"
+    );
+    Ok(result)
+}
+
+fn long_run(cells: [usize; 3], steps: u64) -> Result<CaseResult, BenchError> {
+    let started = Instant::now();
+    let name = format!("{steps} undamped steps");
+    let size = cells.map(|c| c as f64 * 0.01);
+    let b = block(&name, size, cells, 1.5, &steel())?;
+    let n = b.rest.len();
+    let rest = b.rest.clone();
+    let mut s = b.solver(&name, Loads::new(n))?;
+    // A smooth twist and shear, 0.1 m/s at most: the low modes a simulation carries, not the
+    // grid-scale ones whose energy velocity Verlet resolves only to (omega dt)^2.
+    let pi = std::f64::consts::PI;
+    for (v, p) in s.velocities_mut().iter_mut().zip(&rest) {
+        let (x, y, z) = (p[0] / size[0], p[1] / size[1], p[2] / size[2]);
+        *v = [
+            0.1 * (pi * z).sin(),
+            0.1 * (pi * x).sin() * (pi * z).cos(),
+            0.05 * (pi * y).sin(),
+        ];
+    }
+    let note = format!(
+        "steel block of {n} particles at 0.8 of the stable estimate, smooth initial velocities"
+    );
+    Ok(drive(&name, s, steps, false, note, started))
+}
+
+/// A hard case, run on demand.
+type Case = Box<dyn Fn() -> Result<CaseResult, BenchError>>;
+
+/// Runs every hard case; each is isolated, so a panic in one is reported, not propagated.
+pub fn run_all(effort: Effort, progress: &mut dyn FnMut(&str)) -> Vec<CaseResult> {
+    // Step-factor cases run long enough for a slow instability to reach the guard.
+    let (cells, steps, factor_steps, long): ([usize; 3], u64, u64, u64) = match effort {
+        Effort::Tiny => ([4, 4, 4], 300, 300, 2_000),
+        Effort::Full => ([8, 8, 8], 2_000, 20_000, 100_000),
+    };
+    let mut cases: Vec<(String, Case)> = Vec::new();
+    for f in [0.5, 0.9, 1.0, 1.5, 2.0] {
+        cases.push((
+            format!("explicit step at {f} x the stable estimate"),
+            Box::new(move || step_factor(f, cells, factor_steps)),
+        ));
+    }
+    cases.push((
+        "sphere impact".into(),
+        Box::new(move || Ok(sphere_impact(cells))),
+    ));
+    cases.push(("crush".into(), Box::new(move || Ok(crush(cells)))));
+    cases.push((
+        "two materials".into(),
+        Box::new(move || Ok(two_materials(cells, steps))),
+    ));
+    cases.push(("slivers".into(), Box::new(move || slivers(cells, steps))));
+    cases.push(("isolated".into(), Box::new(move || isolated(cells, steps))));
+    cases.push((
+        "spinning".into(),
+        Box::new(move || Ok(spinning(cells, steps))),
+    ));
+    cases.push(("long".into(), Box::new(move || long_run([4, 4, 4], long))));
+    cases
+        .into_iter()
+        .map(|(name, case)| {
+            progress(&format!("stability: {name}"));
+            let started = Instant::now();
+            match catch_unwind(AssertUnwindSafe(case)) {
+                Ok(Ok(r)) => r,
+                Ok(Err(e)) => CaseResult {
+                    name: name.clone(),
+                    outcome: Outcome::Stopped(e.to_string()),
+                    steps: 0,
+                    energy_drift: f64::NAN,
+                    max_speed: 0.0,
+                    wall_s: started.elapsed().as_secs_f64(),
+                    note: "refused at setup".into(),
+                },
+                Err(panic) => CaseResult {
+                    name: name.clone(),
+                    outcome: Outcome::Failed(format!(
+                        "panic: {}",
+                        panic
+                            .downcast_ref::<String>()
+                            .cloned()
+                            .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                            .unwrap_or_default()
+                    )),
+                    steps: 0,
+                    energy_drift: f64::NAN,
+                    max_speed: 0.0,
+                    wall_s: started.elapsed().as_secs_f64(),
+                    note: String::new(),
+                },
+            }
+        })
+        .collect()
+}
+
+/// The results as a Markdown table.
+pub fn table(results: &[CaseResult]) -> Table {
+    let mut t = Table::new(&[
+        "case",
+        "outcome",
+        "steps",
+        "energy drift",
+        "max speed (m/s)",
+        "wall time (s)",
+        "notes",
+    ]);
+    for r in results {
+        let outcome = match &r.outcome {
+            Outcome::Survived => "survived".to_string(),
+            Outcome::Stopped(m) => format!("stopped: {m}"),
+            Outcome::Failed(m) => format!("**FAILED**: {m}"),
+            Outcome::Runaway(m) => format!("**FAILED** (runaway): {m}"),
+        };
+        t.push(vec![
+            r.name.clone(),
+            outcome,
+            r.steps.to_string(),
+            if r.energy_drift.is_finite() {
+                format!("{:+.2e}", r.energy_drift)
+            } else {
+                "-".into()
+            },
+            format!("{:.3e}", r.max_speed),
+            format!("{:.2}", r.wall_s),
+            r.note.clone(),
+        ]);
+    }
+    t
+}

@@ -1,0 +1,93 @@
+//! The harness itself on its tiny cases: every accuracy row has a finite error, refining the
+//! cantilever does not make it worse, no stability case ends in a NaN or a panic, and the
+//! speed tables hold positive rates. (The measurements are in BENCHMARKS.md, made with the
+//! full cases; timings are never asserted.)
+
+use perifrac_bench::stability::Outcome;
+use perifrac_bench::{accuracy, speed, stability, Effort};
+
+#[test]
+fn accuracy_rows_are_finite_and_refinement_helps_the_cantilever() {
+    let reports = accuracy::run_all(Effort::Tiny, &[], &mut |_| {}).unwrap();
+    let names: Vec<&str> = reports.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, accuracy::CASES);
+    for r in &reports {
+        assert!(!r.runs.is_empty(), "{}", r.name);
+        for run in &r.runs {
+            assert!(
+                run.error.is_finite() && run.value.is_finite() && run.wall_s >= 0.0,
+                "{}: {run:?}",
+                r.name
+            );
+        }
+        assert_eq!(r.table.rows.len(), r.runs.len());
+        assert!(r.table.to_markdown().contains(&r.runs[0].resolution));
+    }
+    let cantilever = &reports[0];
+    let pd: Vec<_> = cantilever
+        .runs
+        .iter()
+        .filter(|r| r.method == "PD")
+        .collect();
+    // 20x2x2 then 30x3x3 cells at k = 1.5: measured +7.8% then -3.8%.
+    assert_eq!(pd.len(), 2);
+    assert!(pd[1].error.abs() <= pd[0].error.abs(), "{pd:?}");
+    // The quadratic reference is within 1% of scikit-fem's converged answer already at 20
+    // cells along (measured -0.52%), and linear tets lock (measured -49%).
+    let p2 = cantilever
+        .runs
+        .iter()
+        .rfind(|r| r.method == "FEM P2")
+        .unwrap();
+    assert!(
+        (p2.value / accuracy::SCIKIT_FEM - 1.0).abs() < 0.01,
+        "{p2:?}"
+    );
+    let p1 = cantilever
+        .runs
+        .iter()
+        .find(|r| r.method == "FEM P1")
+        .unwrap();
+    assert!(p1.error < -0.3, "{p1:?}");
+}
+
+#[test]
+fn no_stability_case_ends_in_a_nan_or_a_panic() {
+    let results = stability::run_all(Effort::Tiny, &mut |_| {});
+    assert!(results.len() >= 12);
+    for r in &results {
+        assert!(
+            !matches!(r.outcome, Outcome::Failed(_)),
+            "{}: {:?}",
+            r.name,
+            r.outcome
+        );
+        assert!(r.max_speed.is_finite(), "{}", r.name);
+    }
+    let by_name = |s: &str| results.iter().find(|r| r.name.contains(s)).unwrap();
+    // Half the stable step survives; one and a half and twice are stopped by the guard with a
+    // message that says what to do.
+    assert_eq!(by_name("at 0.5 x").outcome, Outcome::Survived);
+    for f in ["at 1.5 x", "at 2 x"] {
+        match &by_name(f).outcome {
+            Outcome::Stopped(m) => assert!(m.contains("reduce the time step"), "{m}"),
+            other => panic!("{f}: {other:?}"),
+        }
+    }
+    // A rigid spin keeps its energy to rounding (measured 7e-10 over 300 steps).
+    assert!(by_name("spinning").energy_drift.abs() < 1e-6);
+}
+
+#[test]
+fn speed_tables_hold_positive_rates() {
+    let t = speed::paths(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(t.rows.len(), 5);
+    for row in &t.rows {
+        let rate: f64 = row[4].parse().unwrap();
+        let bytes: f64 = row[7].parse().unwrap();
+        assert!(rate > 0.0 && bytes > 8.0, "{row:?}");
+    }
+    let share = speed::fracture_share(Effort::Tiny, &mut |_| {}).unwrap();
+    let broken: u64 = share.rows[0][2].parse().unwrap();
+    assert!(broken > 0, "the slab did not break: {:?}", share.rows[0]);
+}

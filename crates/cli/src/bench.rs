@@ -1,0 +1,164 @@
+//! `perifrac bench accuracy | stability | speed`: run the benchmark harness and write its
+//! Markdown report and PNG plots into a directory.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use perifrac_bench::{accuracy, speed, stability, Effort};
+
+/// Arguments of `perifrac bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// What to measure.
+    #[command(subcommand)]
+    pub which: Which,
+}
+
+/// The benchmarks.
+#[derive(clap::Subcommand, Debug)]
+pub enum Which {
+    /// Error against references (closed forms, converged FEM) over resolution and horizon.
+    Accuracy {
+        /// Output and effort.
+        #[command(flatten)]
+        common: Common,
+        /// Only these cases (cantilever, swing, twist, moduli, wave_speed); default all.
+        #[arg(long, value_delimiter = ',')]
+        case: Vec<String>,
+    },
+    /// Hard cases: each survives, stops with a message, or is reported as a failure.
+    Stability(Common),
+    /// Bond-update rates per material path, seconds per step at the paper's wall size, the
+    /// topology's share of a step during heavy fracture, memory per bond.
+    Speed(Common),
+}
+
+/// Options every benchmark takes.
+#[derive(clap::Args, Debug)]
+pub struct Common {
+    /// Directory for the report (`<name>.md`) and the plots (`<name>_<case>.png`).
+    #[arg(short, long, default_value = "out/bench")]
+    pub output: PathBuf,
+    /// Only the smallest cases (seconds): a check that the harness runs, not a measurement.
+    #[arg(long)]
+    pub quick: bool,
+}
+
+/// Runs a benchmark.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    match &args.which {
+        Which::Accuracy { common, case } => accuracy_report(common, case),
+        Which::Stability(c) => stability_report(c),
+        Which::Speed(c) => speed_report(c),
+    }
+}
+
+fn effort(c: &Common) -> Effort {
+    if c.quick {
+        Effort::Tiny
+    } else {
+        Effort::Full
+    }
+}
+
+fn accuracy_report(c: &Common, only: &[String]) -> Result<()> {
+    if let Some(bad) = only.iter().find(|o| !accuracy::CASES.contains(&o.as_str())) {
+        anyhow::bail!(
+            "unknown case {bad:?}; the cases are {}",
+            accuracy::CASES.join(", ")
+        );
+    }
+    std::fs::create_dir_all(&c.output)
+        .with_context(|| format!("cannot create {}", c.output.display()))?;
+    let started = Instant::now();
+    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
+    let cases = accuracy::run_all(effort(c), only, &mut progress)?;
+    let mut md = String::from("# perifrac bench accuracy\n\n");
+    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    for case in &cases {
+        let png = format!("accuracy_{}.png", case.name);
+        let plotted = match case.plot.write_png(&c.output.join(&png)) {
+            Ok(()) => true,
+            Err(e) => {
+                eprintln!("note: {e}; the table is written without its plot");
+                false
+            }
+        };
+        md.push_str(&format!("## {}\n\n{}\n\n", case.title, case.text));
+        md.push_str(&case.table.to_markdown());
+        if plotted {
+            md.push_str(&format!(
+                "\n![{}: error against wall time]({png})\n",
+                case.title
+            ));
+        }
+        md.push('\n');
+    }
+    let path = c.output.join("accuracy.md");
+    write_atomic(&path, &md)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn stability_report(c: &Common) -> Result<()> {
+    std::fs::create_dir_all(&c.output)
+        .with_context(|| format!("cannot create {}", c.output.display()))?;
+    let started = Instant::now();
+    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
+    let results = stability::run_all(effort(c), &mut progress);
+    let failed = results
+        .iter()
+        .filter(|r| matches!(r.outcome, stability::Outcome::Failed(_)))
+        .count();
+    let mut md = String::from("# perifrac bench stability\n\n");
+    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    md.push_str(&stability::table(&results).to_markdown());
+    let path = c.output.join("stability.md");
+    write_atomic(&path, &md)?;
+    eprintln!("wrote {}", path.display());
+    anyhow::ensure!(
+        failed == 0,
+        "{failed} case(s) failed; see {}",
+        path.display()
+    );
+    Ok(())
+}
+
+fn speed_report(c: &Common) -> Result<()> {
+    std::fs::create_dir_all(&c.output)
+        .with_context(|| format!("cannot create {}", c.output.display()))?;
+    let started = Instant::now();
+    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
+    let e = effort(c);
+    let paths = speed::paths(e, &mut progress)?;
+    let wall = speed::glass_wall(e, &mut progress)?;
+    let share = speed::fracture_share(e, &mut progress)?;
+    let mut md = String::from("# perifrac bench speed\n\n");
+    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    md.push_str("## Bond-update rate per material path\n\n");
+    md.push_str(&paths.to_markdown());
+    md.push_str("\n## A glass wall of the paper's size\n\n");
+    md.push_str(&wall.to_markdown());
+    md.push_str("\n## Where a step goes while a slab shatters\n\n");
+    md.push_str(&share.to_markdown());
+    let path = c.output.join("speed.md");
+    write_atomic(&path, &md)?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// One line on where and how long the benchmark ran.
+fn machine_line(wall: f64) -> String {
+    let threads = rayon::current_num_threads();
+    format!(
+        "Ran with {threads} worker thread(s) in {wall:.0} s (`perifrac {}`).\n\n",
+        std::env::args().skip(1).collect::<Vec<_>>().join(" ")
+    )
+}
+
+fn write_atomic(path: &Path, text: &str) -> Result<()> {
+    perifrac_io::atomic_write(path, |w| w.write_all(text.as_bytes()))
+        .with_context(|| format!("cannot write {}", path.display()))
+}
