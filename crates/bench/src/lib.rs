@@ -18,7 +18,7 @@ pub mod stability;
 mod table;
 
 pub use error::BenchError;
-pub use plot::{Plot, Series};
+pub use plot::{Plot, Series, FONT_PATHS};
 pub use table::Table;
 
 /// How much of a benchmark to run.

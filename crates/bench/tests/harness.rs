@@ -91,3 +91,30 @@ fn speed_tables_hold_positive_rates() {
     let broken: u64 = share.rows[0][2].parse().unwrap();
     assert!(broken > 0, "the slab did not break: {:?}", share.rows[0]);
 }
+
+#[test]
+fn plots_are_written_as_png() {
+    if !perifrac_bench::FONT_PATHS
+        .iter()
+        .any(|p| std::path::Path::new(p).exists())
+    {
+        eprintln!("SKIPPED: no TrueType font (apt-get install fonts-dejavu-core)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let plot = perifrac_bench::Plot {
+        title: "test".into(),
+        x_label: "wall time (s)".into(),
+        y_label: "|relative error|".into(),
+        series: vec![perifrac_bench::Series {
+            name: "PD k = 1.5".into(),
+            points: vec![(0.1, 0.2), (1.0, 0.05), (f64::NAN, 1.0), (10.0, 0.0)],
+        }],
+    };
+    let path = tmp.path().join("p.png");
+    plot.write_png(&path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // Nothing but the picture is left behind.
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}
