@@ -7,9 +7,8 @@
 //! rho = 1000 kg/m^3) starts straight and falls under gravity, swinging down and back; the
 //! twisting bar (kappa = 1e3 kPa, mu = 6e2 kPa) starts with an angular velocity about its axis
 //! growing linearly from the clamp to 40 rad/s at the free end, and twists about a radian and
-//! back. The reference is quadratic tets with corotated kinematics, integrated explicitly; it
-//! is shown converged by running it again on a mesh twice as fine and, separately, with half
-//! the step.
+//! back. The reference is quadratic tets with corotated kinematics, integrated explicitly; its
+//! error is bounded by running it on a mesh half as fine and, there, with half the step.
 
 use std::time::Instant;
 
@@ -237,24 +236,28 @@ fn motion_case(
     effort: Effort,
     progress: &mut dyn FnMut(&str),
 ) -> Result<CaseReport, BenchError> {
-    // Torsion needs a finer reference than bending: at 20 cells along (2 x 2 across) the
-    // twisting bar's P2 answer still moved by 1.8% of the diagonal when refined.
+    // Torsion needs a finer reference than bending: the twisting bar's P2 answer moved by 1.8%
+    // of the diagonal from 20 to 40 cells along, and by 0.65% from 40 to 80.
     let (levels, factors, fem_nx): (&[usize], &[f64], usize) = match (effort, motion) {
         (Effort::Tiny, _) => (&[20], &[1.5], 10),
-        (Effort::Full, Motion::Swing) => (&[20, 30, 40], &HORIZON_FACTORS, 20),
-        (Effort::Full, Motion::Twist) => (&[20, 30, 40], &HORIZON_FACTORS, 40),
+        (Effort::Full, Motion::Swing) => (&[20, 30, 40, 60], &HORIZON_FACTORS, 20),
+        (Effort::Full, Motion::Twist) => (&[20, 30, 40, 60], &HORIZON_FACTORS, 40),
     };
+    // The reference is the finer of two meshes; the coarser one, and a run of it at half the
+    // step, bound its error.
     progress(&format!(
-        "{}: corotated P2 reference at {fem_nx} cells along",
+        "{}: corotated P2 at {fem_nx} cells along",
         motion.name()
     ));
-    let reference = Reference::run(motion, fem_nx, 0.5)?;
-    progress(&format!(
-        "{}: the reference refined, and at half its step",
-        motion.name()
-    ));
-    let fine = Reference::run(motion, 2 * fem_nx, 0.5)?;
+    let coarse = Reference::run(motion, fem_nx, 0.5)?;
+    progress(&format!("{}: the same at half the step", motion.name()));
     let half = Reference::run(motion, fem_nx, 0.25)?;
+    let fine_nx = 2 * fem_nx;
+    progress(&format!(
+        "{}: the reference, at {fine_nx} cells along",
+        motion.name()
+    ));
+    let reference = Reference::run(motion, fine_nx, 0.5)?;
     let mut runs = Vec::new();
     let (mut by_mesh, mut by_step): (f64, f64) = (0.0, 0.0);
     for &k in factors {
@@ -265,8 +268,9 @@ fn motion_case(
             ));
             let (mut run, points, pd) = peridynamics(motion, nx, k)?;
             let fem = reference.at(&points)?;
-            by_mesh = by_mesh.max(deviation(&fem, &fine.at(&points)?));
-            by_step = by_step.max(deviation(&fem, &half.at(&points)?));
+            let coarse_at = coarse.at(&points)?;
+            by_mesh = by_mesh.max(deviation(&fem, &coarse_at));
+            by_step = by_step.max(deviation(&coarse_at, &half.at(&points)?));
             let dev = deviation(&pd, &fem);
             run.value = dev;
             run.error = dev;
@@ -274,8 +278,10 @@ fn motion_case(
         }
     }
     let ref_cost = (reference.wall_s, reference.steps);
-    let smallest = runs.iter().map(|r| r.error).fold(f64::INFINITY, f64::min);
-    let worst_ref = by_mesh.max(by_step);
+    // Quadratic elements converge at least at second order, so the finer mesh's own error is
+    // at most a third of its distance to the coarser one.
+    let ref_error = by_mesh / 3.0 + by_step;
+    let resolved = runs.iter().filter(|r| ref_error < 0.1 * r.error).count();
     let (table, plot) = table_and_plot(
         &format!("{} against corotated FEM", motion.name()),
         "deviation / diagonal",
@@ -289,9 +295,11 @@ fn motion_case(
          paper's: the largest distance between a particle and the reference at the same rest \
          point, over the bar's particles and {SAMPLES} sample times, over the diagonal of the \
          bounding box ({:.4} m); the paper reports under 10%. The reference is corotated \
-         quadratic tets at {fem_nx} cells along (one run took {:.1} s, {} steps at half its \
-         stable step); refining it to {} cells moved it by {:.3}% of the diagonal, halving its \
-         step by {:.4}%: {} a tenth of the smallest peridynamic error ({:.2}%).",
+         quadratic tets at {fine_nx} cells along (the run took {:.1} s, {} steps at half its \
+         stable step). At {fem_nx} cells along the answer differs from it by {:.3}% of the \
+         diagonal, and halving the step there moves it by {:.4}%: for second-order elements \
+         the reference's own error is then at most {:.3}%, under a tenth of {resolved} of the \
+         {} peridynamic deviations (those above {:.2}%).",
         match motion {
             Motion::Swing => "released straight under gravity",
             Motion::Twist => "started with an angular velocity about x growing from 0 at the clamp to 40 rad/s at the free end",
@@ -300,11 +308,11 @@ fn motion_case(
         diagonal(),
         ref_cost.0,
         ref_cost.1,
-        2 * fem_nx,
         100.0 * by_mesh,
         100.0 * by_step,
-        if worst_ref < 0.1 * smallest { "under" } else { "NOT under" },
-        100.0 * smallest,
+        100.0 * ref_error,
+        runs.len(),
+        1000.0 * ref_error,
     );
     Ok(CaseReport {
         name: match motion {
