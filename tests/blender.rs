@@ -1,14 +1,15 @@
 //! Blender reads our frames with the crack flag: `tools/blender_import.py`, run inside
 //! Blender, imports a tiny run of the default scene and reports, per frame, the faces and
-//! crack faces it made, which must match what `run.json` says was written. Skipped (and said
-//! so) when `blender` is not installed: it is a large package, not installed by CI.
+//! crack faces it made. Checked: it runs without a traceback, reports every frame `run.json`
+//! lists, each with the crack-face count `run.json` gives (`crack_triangles`), and saves the
+//! .blend; the total face counts are not compared. Skipped (and said so) when `blender` is not
+//! installed: it is a large package, not installed by CI.
 
 mod common;
 
-use std::path::PathBuf;
 use std::process::Command;
 
-use common::ok;
+use common::{ok, repo, tiny_wall};
 
 #[test]
 fn blender_imports_every_frame_with_its_crack_faces() {
@@ -16,15 +17,8 @@ fn blender_imports_every_frame_with_its_crack_faces() {
         eprintln!("SKIPPED: blender is not installed (apt-get install blender to run this check)");
         return;
     }
-    let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(repo.join("data/scenes/wall.toml")).unwrap();
-    let scene = tmp.path().join("tiny.toml");
-    std::fs::write(
-        &scene,
-        text.replace("cells = [24, 24, 3]", "cells = [12, 12, 2]"),
-    )
-    .unwrap();
+    let scene = tiny_wall(tmp.path());
     let out = tmp.path().join("out");
     ok(&[
         "run",
@@ -37,7 +31,7 @@ fn blender_imports_every_frame_with_its_crack_faces() {
     let blend = tmp.path().join("tiny.blend");
     let res = Command::new("blender")
         .args(["-b", "--python"])
-        .arg(repo.join("tools/blender_import.py"))
+        .arg(repo().join("tools/blender_import.py"))
         .arg("--")
         .arg(&out)
         .args(["--report", "--save"])

@@ -4,23 +4,14 @@
 
 mod common;
 
-use common::{fails, perifrac};
+use common::{fails, ok};
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
 use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
 use perifrac_topology::{primitives, NO_TET};
 use serde_json::json;
-
-fn stdout_of_success(out: &Output, what: &str) -> String {
-    assert!(
-        out.status.success(),
-        "{what} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
 
 /// Runs `perifrac render` expecting failure; returns stderr.
 fn render_fails(args: &[&str]) -> String {
@@ -113,8 +104,7 @@ fn writes_one_pov_per_frame_including_its_mesh() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     make_run(dir);
-    let out = perifrac(&["render", dir.to_str().unwrap(), "--no-povray"]);
-    stdout_of_success(&out, "render --no-povray");
+    ok(&["render", dir.to_str().unwrap(), "--no-povray"]);
     let render = dir.join("render");
     let pov0 = std::fs::read_to_string(render.join("frame_0000.pov")).unwrap();
     let pov1 = std::fs::read_to_string(render.join("frame_0001.pov")).unwrap();
@@ -136,7 +126,13 @@ fn writes_one_pov_per_frame_including_its_mesh() {
             assert!(at < include_at, "{name} declared after the include");
         }
         assert!(pov.contains("object { surface"));
-        assert!(pov.contains("plane {"), "the ground");
+        // The run's ground: a checkered plane (the backdrop floor, for runs without one, is
+        // plain).
+        assert!(
+            pov.lines()
+                .any(|l| l.starts_with("plane {") && l.contains("checker")),
+            "the ground"
+        );
         assert!(pov.contains("sphere {"), "the ball");
         assert!(pov.contains("light_source"));
     }
@@ -154,7 +150,7 @@ fn renders_the_last_frame_when_povray_is_installed() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
     make_run(dir);
-    let out = perifrac(&[
+    ok(&[
         "render",
         dir.to_str().unwrap(),
         "--last",
@@ -163,7 +159,6 @@ fn renders_the_last_frame_when_povray_is_installed() {
         "--height",
         "120",
     ]);
-    stdout_of_success(&out, "render --last");
     let render = dir.join("render");
     assert!(
         !render.join("frame_0000.pov").exists(),
@@ -187,7 +182,12 @@ fn without_povray_on_the_path_it_writes_scenes_and_says_so() {
         .env("PATH", "")
         .output()
         .unwrap();
-    let stdout = stdout_of_success(&out, "render without povray");
+    assert!(
+        out.status.success(),
+        "render without povray failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("povray not found on PATH"), "{stdout}");
     assert!(stdout.contains("wrote 1 .pov files"), "{stdout}");
     assert!(dir.join("render/frame_0001.pov").exists());

@@ -193,8 +193,9 @@ fn stretched_beams_thin_by_their_poisson_ratio() {
         let measured = -lateral / axial;
         eprintln!("{name}: axial {axial:.4}, lateral {lateral:.4}, nu {measured:.3} (given {nu})");
         assert!((axial - 0.2).abs() < 0.02, "{name}: axial strain {axial}");
-        // Measured 0.083, 0.199 and 0.320 against 0.098, 0.200 and 0.301: within 0.02 at 20%
-        // strain, where the engineering ratio differs from the small-strain one by about that.
+        // Measured 0.083, 0.199 and 0.320 against 0.098, 0.200 and 0.301: off by 0.015, 0.001
+        // and 0.019 at 20% strain, where the engineering ratio measured here may differ from the
+        // small-strain one by about 0.02; the bound allows that and half as much again.
         assert!(
             (measured - nu).abs() < 0.03,
             "{name}: nu {measured} for {nu}"

@@ -1,8 +1,27 @@
 //! Helpers shared by the end-to-end tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+/// The repository root.
+pub fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// The default scene (`data/scenes/wall.toml`) with fewer cells, written into `dir`; everything
+/// else (glass, ball, duration) is the default scene's.
+pub fn tiny_wall(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(repo().join("data/scenes/wall.toml")).unwrap();
+    let tiny = text.replace("cells = [24, 24, 3]", "cells = [12, 12, 2]");
+    assert_ne!(
+        tiny, text,
+        "wall.toml no longer has the cells line this test shrinks"
+    );
+    let path = dir.join("tiny_wall.toml");
+    std::fs::write(&path, tiny).unwrap();
+    path
+}
 
 /// `../shared/data/meshes` beside the checkout (CI clones the repo with `shared/` beside it).
 pub fn shared_meshes() -> PathBuf {

@@ -15,16 +15,41 @@ use crate::error::BenchError;
 /// slab).
 pub(crate) const KUHN_EDGE_PER_CELL: f64 = 1.3;
 
-/// A peridynamic body ready to integrate, and facts for the report.
+/// A peridynamic body ready to integrate; its rest positions, horizon and bonds are the
+/// model's.
 pub(crate) struct Body {
-    /// Rest positions of the particles (m).
-    pub rest: Vec<Vec3>,
-    /// Horizon (m).
-    pub horizon: f64,
-    /// Directed bonds.
-    pub bonds: usize,
     /// The model.
     pub model: ChenModel,
+}
+
+/// `v, t` as a tet mesh, its refusal as a [`BenchError::Mesh`] of `case`.
+pub(crate) fn tet_mesh(case: &str, v: Vec<Vec3>, t: Vec<[u32; 4]>) -> Result<TetMesh, BenchError> {
+    let (mesh, _) = TetMesh::new(v, t).map_err(|e| BenchError::Mesh {
+        case: case.into(),
+        message: e.to_string(),
+    })?;
+    Ok(mesh)
+}
+
+/// `mesh` as a peridynamic body of `material`, one particle per tet, with horizon `k` times
+/// the mesh's mean edge length.
+pub(crate) fn mesh_body(
+    case: &str,
+    mesh: &TetMesh,
+    k: f64,
+    material: &ChenMaterial,
+) -> Result<Body, BenchError> {
+    let physics = |cause| BenchError::Physics {
+        case: case.into(),
+        cause,
+    };
+    let horizon = k * mesh.mean_edge_length();
+    let rest = mesh.rest_barycentres();
+    let (disc, _) =
+        Discretization::from_tets(&rest, &mesh.rest_volumes(), mesh.neighbours(), horizon)
+            .map_err(physics)?;
+    let model = ChenModel::new(disc, std::slice::from_ref(material)).map_err(physics)?;
+    Ok(Body { model })
 }
 
 /// The box `[min, max]` in `cells` Kuhn cells as a peridynamic body of `material` with
@@ -38,31 +63,18 @@ pub(crate) fn body(
     material: &ChenMaterial,
 ) -> Result<Body, BenchError> {
     let (v, t) = box_data(min, max, cells);
-    let (mesh, _) = TetMesh::new(v, t).map_err(|e| BenchError::Mesh {
-        case: case.into(),
-        message: e.to_string(),
-    })?;
-    let physics = |source| BenchError::Physics {
-        case: case.into(),
-        source,
-    };
-    let horizon = k * mesh.mean_edge_length();
-    let rest = mesh.rest_barycentres();
-    let (disc, report) =
-        Discretization::from_tets(&rest, &mesh.rest_volumes(), mesh.neighbours(), horizon)
-            .map_err(physics)?;
-    let model = ChenModel::new(disc, std::slice::from_ref(material)).map_err(physics)?;
-    Ok(Body {
-        rest,
-        horizon,
-        bonds: report.bonds,
-        model,
-    })
+    mesh_body(case, &tet_mesh(case, v, t)?, k, material)
+}
+
+/// Cells across the section of a bar of `nx` cells along: `nx / 10`, at least one.
+pub(crate) fn cells_across(nx: usize) -> usize {
+    (nx / 10).max(1)
 }
 
 /// A bar along x from 0 to `length` with a square section `side` (m, centred on the axis), `nx`
-/// cells along and `nx / 10` across, plus a clamp layer of whole cells at least one horizon
-/// (`k` mean edges) thick behind x = 0. Returns the body and the clamp layer's particles.
+/// cells along and [`cells_across`] across, plus a clamp layer of whole cells at least one
+/// horizon (`k` mean edges) thick behind x = 0. Returns the body and the clamp layer's
+/// particles.
 pub(crate) fn clamped_bar(
     case: &str,
     length: f64,
@@ -71,7 +83,7 @@ pub(crate) fn clamped_bar(
     k: f64,
     material: &ChenMaterial,
 ) -> Result<(Body, Vec<u32>), BenchError> {
-    let n = (nx / 10).max(1);
+    let n = cells_across(nx);
     let h = length / nx as f64;
     let clamp = (k * KUHN_EDGE_PER_CELL).ceil() as usize;
     let b = body(
@@ -98,26 +110,65 @@ pub(crate) fn block(
 }
 
 impl Body {
+    /// Rest positions of the particles (m).
+    pub fn rest(&self) -> &[Vec3] {
+        self.model.discretization().rest_positions()
+    }
+
+    /// Horizon (m).
+    pub fn horizon(&self) -> f64 {
+        self.model.discretization().horizon()
+    }
+
+    /// Directed bonds.
+    pub fn bonds(&self) -> usize {
+        self.model.discretization().family().num_bonds()
+    }
+
     /// An explicit solver at 0.8 of the estimated stable step.
     pub fn solver(self, case: &str, loads: Loads) -> Result<Explicit<ChenModel>, BenchError> {
+        self.solver_at(case, loads, TimeStep::Auto { safety: 0.8 })
+    }
+
+    /// An explicit solver with time step `dt`.
+    pub fn solver_at(
+        self,
+        case: &str,
+        loads: Loads,
+        dt: TimeStep,
+    ) -> Result<Explicit<ChenModel>, BenchError> {
         let config = ExplicitConfig {
-            dt: TimeStep::Auto { safety: 0.8 },
+            dt,
             guard_fraction: 0.5,
         };
-        Explicit::new(self.model, &self.rest, self.horizon, loads, config).map_err(|source| {
+        let rest = self.rest().to_vec();
+        let horizon = self.horizon();
+        Explicit::new(self.model, &rest, horizon, loads, config).map_err(|cause| {
             BenchError::Physics {
                 case: case.into(),
-                source,
+                cause,
             }
         })
     }
 
     /// Indices of the particles whose rest position passes `select`.
     pub fn select(&self, select: impl Fn(Vec3) -> bool) -> Vec<u32> {
-        (0..self.rest.len() as u32)
-            .filter(|&i| select(self.rest[i as usize]))
+        let rest = self.rest();
+        (0..rest.len() as u32)
+            .filter(|&i| select(rest[i as usize]))
             .collect()
     }
+}
+
+/// Rest positions of the particles of `s` (m).
+pub(crate) fn rest_of(s: &Explicit<ChenModel>) -> &[Vec3] {
+    s.model().discretization().rest_positions()
+}
+
+/// Sets the velocity of every particle of `s` to `velocity` at its rest position.
+pub(crate) fn set_velocities(s: &mut Explicit<ChenModel>, velocity: impl Fn(Vec3) -> Vec3) {
+    let v: Vec<Vec3> = rest_of(s).iter().map(|&x| velocity(x)).collect();
+    s.velocities_mut().copy_from_slice(&v);
 }
 
 /// Least-squares line `v = a + b u`: returns `(a, b)`.

@@ -5,7 +5,7 @@
 //! wall time, steps, bonds and error; [`stability`] runs hard cases and says whether each
 //! survived, stopped with a message or failed; [`speed`] times the force loop. Results come as
 //! [`Table`]s (Markdown) and [`Plot`]s (PNG through plotters). This crate is a harness: it uses
-//! the physics, fem, topology and contact crates and is used only by the command line.
+//! the physics, fem, topology and scene crates and is used only by the command line.
 
 #![warn(missing_docs)]
 

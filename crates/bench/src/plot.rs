@@ -37,6 +37,11 @@ fn short(v: f64) -> String {
     format!("{rounded}")
 }
 
+/// Whether a point can be drawn on logarithmic axes: finite and positive.
+fn drawable(&(x, y): &(f64, f64)) -> bool {
+    x.is_finite() && y.is_finite() && x > 0.0 && y > 0.0
+}
+
 /// One curve: a name for the legend and its points `(x, y)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Series {
@@ -101,7 +106,7 @@ impl Plot {
             self.series
                 .iter()
                 .flat_map(|s| s.points.iter())
-                .filter(|(x, y)| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0)
+                .filter(|p| drawable(p))
         };
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for &(x, y) in points() {
@@ -133,12 +138,7 @@ impl Plot {
             .map_err(|x| e(&x))?;
         for (k, s) in self.series.iter().enumerate() {
             let color = COLORS[k % COLORS.len()];
-            let pts: Vec<(f64, f64)> = s
-                .points
-                .iter()
-                .copied()
-                .filter(|(x, y)| x.is_finite() && y.is_finite() && *x > 0.0 && *y > 0.0)
-                .collect();
+            let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(drawable).collect();
             chart
                 .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
                 .map_err(|x| e(&x))?

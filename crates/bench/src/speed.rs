@@ -83,9 +83,9 @@ const BATCHES: u32 = 3;
 /// Times [`BATCHES`] batches of `steps` explicit steps of `s` (after one untimed step);
 /// returns the mean per step of the fastest batch.
 fn time_steps(s: &mut Explicit<ChenModel>, steps: u32, case: &str) -> Result<Duration, BenchError> {
-    let physics = |source| BenchError::Physics {
+    let physics = |cause| BenchError::Physics {
         case: case.into(),
-        source,
+        cause,
     };
     s.step().map_err(physics)?;
     let mut best = Duration::MAX;
@@ -108,12 +108,10 @@ fn moving_block(
 ) -> Result<(Explicit<ChenModel>, usize), BenchError> {
     let size = cells.map(|c| c as f64 * 0.01);
     let b = bar::block(case, size, cells, 1.45, &material(p))?;
-    let bonds = b.bonds;
-    let rest = b.rest.clone();
-    let mut s = b.solver(case, Loads::new(rest.len()))?;
-    for (v, x) in s.velocities_mut().iter_mut().zip(&rest) {
-        *v = [1e-3 * x[1], -1e-3 * x[0], 0.0];
-    }
+    let bonds = b.bonds();
+    let loads = Loads::new(b.rest().len());
+    let mut s = b.solver(case, loads)?;
+    bar::set_velocities(&mut s, |x| [1e-3 * x[1], -1e-3 * x[0], 0.0]);
     Ok((s, bonds))
 }
 
@@ -121,8 +119,7 @@ fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, BenchError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
-        .map_err(|e| BenchError::Mesh {
-            case: "a one-thread pool".into(),
+        .map_err(|e| BenchError::Threads {
             message: e.to_string(),
         })?;
     Ok(pool.install(f))
@@ -187,7 +184,7 @@ pub fn glass_wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Tabl
         alpha: 0.0,
     });
     let b = bar::block(case, size, cells, 1.45, &glass)?;
-    let (n, bonds) = (b.rest.len(), b.bonds);
+    let (n, bonds) = (b.rest().len(), b.bonds());
     let mut s = b.solver(case, Loads::new(n))?;
     let setup = started.elapsed();
     let bytes = s.model().memory_bytes();
@@ -229,21 +226,19 @@ pub fn fracture_share(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<
          [output]\nframes = 1\n",
         cells[0], cells[1], cells[2]
     );
-    let scene =
-        Scene::parse(&text, Path::new("fracture-share.toml")).map_err(|e| BenchError::Mesh {
-            case: "fracture share".into(),
-            message: e.to_string(),
-        })?;
-    let mut setup = Setup::new(&scene, None).map_err(|e| BenchError::Mesh {
+    let scene_error = |e: &dyn std::fmt::Display| BenchError::Scene {
         case: "fracture share".into(),
         message: e.to_string(),
-    })?;
+    };
+    let scene =
+        Scene::parse(&text, Path::new("fracture-share.toml")).map_err(|e| scene_error(&e))?;
+    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&e))?;
     let steps = setup.frames as u64 * setup.steps_per_frame;
     let mut crack_faces = 0;
     for _ in 0..steps {
-        let r = setup.driver.step().map_err(|source| BenchError::Physics {
+        let r = setup.driver.step().map_err(|cause| BenchError::Physics {
             case: "fracture share".into(),
-            source,
+            cause,
         })?;
         crack_faces += r.crack_faces;
     }

@@ -70,13 +70,9 @@ fn accuracy_report(c: &Common, only: &[String]) -> Result<()> {
             accuracy::CASES.join(", ")
         );
     }
-    std::fs::create_dir_all(&c.output)
-        .with_context(|| format!("cannot create {}", c.output.display()))?;
-    let started = Instant::now();
-    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
-    let cases = accuracy::run_all(effort(c), only, &mut progress)?;
-    let mut md = String::from("# perifrac bench accuracy\n\n");
-    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    let report = Report::start(c)?;
+    let cases = accuracy::run_all(effort(c), only, &mut report.progress())?;
+    let mut md = report.header("accuracy");
     for case in &cases {
         let png = format!("accuracy_{}.png", case.name);
         let plotted = match case.plot.write_png(&c.output.join(&png)) {
@@ -96,28 +92,20 @@ fn accuracy_report(c: &Common, only: &[String]) -> Result<()> {
         }
         md.push('\n');
     }
-    let path = c.output.join("accuracy.md");
-    write_atomic(&path, &md)?;
-    eprintln!("wrote {}", path.display());
+    report.write("accuracy", &md)?;
     Ok(())
 }
 
 fn stability_report(c: &Common) -> Result<()> {
-    std::fs::create_dir_all(&c.output)
-        .with_context(|| format!("cannot create {}", c.output.display()))?;
-    let started = Instant::now();
-    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
-    let results = stability::run_all(effort(c), &mut progress);
+    let report = Report::start(c)?;
+    let results = stability::run_all(effort(c), &mut report.progress());
     let failed = results
         .iter()
         .filter(|r| matches!(r.outcome, stability::Outcome::Failed(_)))
         .count();
-    let mut md = String::from("# perifrac bench stability\n\n");
-    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    let mut md = report.header("stability");
     md.push_str(&stability::table(&results).to_markdown());
-    let path = c.output.join("stability.md");
-    write_atomic(&path, &md)?;
-    eprintln!("wrote {}", path.display());
+    let path = report.write("stability", &md)?;
     anyhow::ensure!(
         failed == 0,
         "{failed} case(s) failed; see {}",
@@ -127,26 +115,60 @@ fn stability_report(c: &Common) -> Result<()> {
 }
 
 fn speed_report(c: &Common) -> Result<()> {
-    std::fs::create_dir_all(&c.output)
-        .with_context(|| format!("cannot create {}", c.output.display()))?;
-    let started = Instant::now();
-    let mut progress = |what: &str| eprintln!("[{:7.1} s] {what}", started.elapsed().as_secs_f64());
+    let report = Report::start(c)?;
+    let mut progress = report.progress();
     let e = effort(c);
     let paths = speed::paths(e, &mut progress)?;
     let wall = speed::glass_wall(e, &mut progress)?;
     let share = speed::fracture_share(e, &mut progress)?;
-    let mut md = String::from("# perifrac bench speed\n\n");
-    md.push_str(&machine_line(started.elapsed().as_secs_f64()));
+    let mut md = report.header("speed");
     md.push_str("## Bond-update rate per material path\n\n");
     md.push_str(&paths.to_markdown());
     md.push_str("\n## A glass wall of the paper's size\n\n");
     md.push_str(&wall.to_markdown());
     md.push_str("\n## Where a step goes while a slab shatters\n\n");
     md.push_str(&share.to_markdown());
-    let path = c.output.join("speed.md");
-    write_atomic(&path, &md)?;
-    eprintln!("wrote {}", path.display());
+    report.write("speed", &md)?;
     Ok(())
+}
+
+/// The steps every report shares: its directory, the clock its progress lines and machine line
+/// read, its header and its atomic write.
+struct Report<'a> {
+    output: &'a Path,
+    started: Instant,
+}
+
+impl<'a> Report<'a> {
+    /// Creates the output directory and starts the clock.
+    fn start(c: &'a Common) -> Result<Report<'a>> {
+        std::fs::create_dir_all(&c.output)
+            .with_context(|| format!("cannot create {}", c.output.display()))?;
+        Ok(Report {
+            output: &c.output,
+            started: Instant::now(),
+        })
+    }
+
+    /// Progress lines on stderr, stamped with the time since the start.
+    fn progress(&self) -> impl FnMut(&str) + '_ {
+        |what: &str| eprintln!("[{:7.1} s] {what}", self.started.elapsed().as_secs_f64())
+    }
+
+    /// The title of `<name>.md` and the machine line, with the time taken so far.
+    fn header(&self, name: &str) -> String {
+        let mut md = format!("# perifrac bench {name}\n\n");
+        md.push_str(&machine_line(self.started.elapsed().as_secs_f64()));
+        md
+    }
+
+    /// Writes `md` to `<name>.md` in the output directory and says so; returns its path.
+    fn write(&self, name: &str, md: &str) -> Result<PathBuf> {
+        let path = self.output.join(format!("{name}.md"));
+        write_atomic(&path, md)?;
+        eprintln!("wrote {}", path.display());
+        Ok(path)
+    }
 }
 
 /// One line on where and how long the benchmark ran.

@@ -113,22 +113,10 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {}", message(&err));
+            // Library errors quote what they wrap and do not also chain it, so the chain
+            // (anyhow's contexts over one library error) repeats nothing.
+            eprintln!("error: {err:#}");
             ExitCode::FAILURE
         }
     }
-}
-
-/// The error and its causes on one line, each cause once: library errors often quote their
-/// source in their own message, and `{:#}` would repeat it.
-fn message(err: &anyhow::Error) -> String {
-    let mut text = err.to_string();
-    for cause in err.chain().skip(1) {
-        let cause = cause.to_string();
-        if !text.contains(&cause) {
-            text.push_str(": ");
-            text.push_str(&cause);
-        }
-    }
-    text
 }

@@ -16,10 +16,11 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use perifrac_io::{atomic_write, read_ply_crack, write_povray_mesh2, SurfaceRef};
+use perifrac_physics::math::{add, cross, dot, norm, scale, sub};
+use perifrac_scene::output::{BallJson as Ball, Bounds, GroundJson as Ground};
+use perifrac_scene::{POVRAY_MESH_NAME as MESH_NAME, RUN_FORMAT};
 use serde::Deserialize;
 
-/// The run format this reader understands.
-const RUN_FORMAT: &str = "perifrac-run/1";
 /// Horizontal field of view of the camera, degrees.
 const FOV_DEG: f64 = 40.0;
 /// Camera azimuth from the first horizontal axis (x when z is up) towards minus the second
@@ -31,8 +32,6 @@ const CAMERA_ELEVATION_DEG: f64 = 25.0;
 const FILL: f64 = 0.85;
 /// Lines of `povray` output quoted when it fails.
 const ERROR_LINES: usize = 8;
-/// The mesh2 identifier of the surface in the includes (`perifrac run` writes `surface` too).
-const MESH_NAME: &str = "surface";
 
 /// Options of `perifrac render`.
 #[derive(clap::Args, Debug, Clone)]
@@ -60,6 +59,10 @@ pub struct RenderArgs {
 }
 
 /// `run.json`, as far as rendering needs it; unknown fields are ignored.
+///
+/// A lenient reading of [`perifrac_scene::RunManifest`] (whose boxes, grounds and balls it
+/// shares): every field here may be missing, so a partial or hand-made run file still renders,
+/// where the manifest the run writes has them all.
 #[derive(Deserialize, Debug)]
 struct RunFile {
     #[serde(default)]
@@ -82,18 +85,7 @@ fn z_up() -> [f64; 3] {
     [0.0, 0.0, 1.0]
 }
 
-#[derive(Deserialize, Debug, Clone, Copy)]
-struct Bounds {
-    min: [f64; 3],
-    max: [f64; 3],
-}
-
-#[derive(Deserialize, Debug)]
-struct Ground {
-    point: [f64; 3],
-    normal: [f64; 3],
-}
-
+/// A frame of [`RunFile`]: [`perifrac_scene::output::FrameJson`] with its optional fields.
 #[derive(Deserialize, Debug)]
 struct Frame {
     index: usize,
@@ -111,25 +103,21 @@ struct Frame {
     main_bounds: Option<Bounds>,
 }
 
-#[derive(Deserialize, Debug)]
-struct Ball {
-    center: [f64; 3],
-    radius: f64,
-}
-
 /// Where the camera is and what it looks at, in data coordinates.
 #[derive(Debug, Clone, Copy)]
 struct View {
     location: [f64; 3],
     target: [f64; 3],
     up: [f64; 3],
-    /// Unit horizontal axes (`side × forward = up`), for the lights.
-    side: [f64; 3],
-    forward: [f64; 3],
+    /// Unit horizontal axes (`e1 × e2 = up`), for the camera and the lights.
+    e1: [f64; 3],
+    e2: [f64; 3],
     /// Longest side of the framed bounds.
     extent: f64,
     /// Lowest point of the framed bounds along `up` (a backdrop floor goes below it).
     lowest: f64,
+    /// Width over height of the picture.
+    aspect: f64,
 }
 
 /// Runs `perifrac render`.
@@ -341,12 +329,7 @@ fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
     e1[axis] = 1.0;
     let e1 = normalized(sub(e1, scale(up, dot(e1, up))));
     let e2 = cross(up, e1);
-    let (az, el) = (
-        CAMERA_AZIMUTH_DEG.to_radians(),
-        CAMERA_ELEVATION_DEG.to_radians(),
-    );
-    let horizontal = sub(scale(e1, az.cos()), scale(e2, az.sin()));
-    let to_camera = add(scale(horizontal, el.cos()), scale(up, el.sin()));
+    let to_camera = direction(up, e1, e2, CAMERA_AZIMUTH_DEG, CAMERA_ELEVATION_DEG);
     let forward = scale(to_camera, -1.0);
     let right = normalized(cross(forward, up));
     let cam_up = cross(right, forward);
@@ -357,39 +340,28 @@ fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
     let tan_x = (FOV_DEG.to_radians() / 2.0).tan() * FILL;
     let tan_y = tan_x / aspect;
     let mut distance = extent * 0.5 / tan_x.min(tan_y);
-    for corner in 0..8 {
-        let p = [0, 1, 2].map(|k| {
-            if corner >> k & 1 == 1 {
-                b.max[k]
-            } else {
-                b.min[k]
-            }
-        });
+    let mut lowest = f64::INFINITY;
+    for p in corners(&b) {
         let rel = sub(p, target);
         let (x, y, z) = (dot(rel, right), dot(rel, cam_up), dot(rel, forward));
         distance = distance.max(x.abs() / tan_x - z).max(y.abs() / tan_y - z);
+        lowest = lowest.min(dot(p, up));
     }
-    let lowest = (0..8)
-        .map(|corner| {
-            let p = [0, 1, 2].map(|k| {
-                if corner >> k & 1 == 1 {
-                    b.max[k]
-                } else {
-                    b.min[k]
-                }
-            });
-            dot(p, up)
-        })
-        .fold(f64::INFINITY, f64::min);
     View {
         location: add(target, scale(to_camera, distance)),
         target,
         up,
-        side: e1,
-        forward: e2,
+        e1,
+        e2,
         extent,
         lowest,
+        aspect,
     }
+}
+
+/// The 8 corners of `b`.
+fn corners(b: &Bounds) -> [[f64; 3]; 8] {
+    std::array::from_fn(|c| [0, 1, 2].map(|k| if c >> k & 1 == 1 { b.max[k] } else { b.min[k] }))
 }
 
 /// The `#include` string of the frame's mesh2, converting its PLY into `render/` when the run
@@ -473,10 +445,16 @@ fn scene_text(
     // `write!` into a String cannot fail.
     let _ = writeln!(
         w,
-        "// perifrac render: frame {} (t = {} s). Render from this directory:\n//   povray +Iframe_{:04}.pov +W{} +H{} -D +A0.3\n\
-         // Data are z-up (up = {:?}) and right-handed; POV-Ray is y-up and left-handed, so every\n\
+        "// perifrac render: frame {} (t = {} s). Render from this directory:\n//   povray +Iframe_{:04}.pov +W{} +H{} -D {}\n\
+         // Data have up = {:?} and are right-handed; POV-Ray is y-up and left-handed, so every\n\
          // point here has y and z swapped, and so has the mesh (its matrix).",
-        frame.index, frame.time, frame.index, args.width, args.height, run.up
+        frame.index,
+        frame.time,
+        frame.index,
+        args.width,
+        args.height,
+        antialias_flag(args.antialias),
+        run.up
     );
     let _ = writeln!(
         w,
@@ -492,12 +470,12 @@ fn scene_text(
     );
     let _ = writeln!(w, "#include \"{include}\"\n");
 
-    let aspect = f64::from(args.width) / f64::from(args.height);
     let _ = writeln!(
         w,
-        "camera {{\n  perspective\n  location {}\n  sky {}\n  up y\n  right x*{aspect}\n  angle {FOV_DEG}\n  look_at {}\n}}",
+        "camera {{\n  perspective\n  location {}\n  sky {}\n  up y\n  right x*{}\n  angle {FOV_DEG}\n  look_at {}\n}}",
         pov(view.location),
         pov(view.up),
+        view.aspect,
         pov(view.target)
     );
     let far = view.extent * 20.0;
@@ -549,12 +527,21 @@ fn scene_text(
 /// Unit direction towards a light: `azimuth_from_camera` degrees round from the camera's
 /// azimuth (positive towards the first horizontal axis, +x when z is up), `elevation` degrees up.
 fn light_dir(view: &View, azimuth_from_camera: f64, elevation: f64) -> [f64; 3] {
-    let (az, el) = (
-        (CAMERA_AZIMUTH_DEG - azimuth_from_camera).to_radians(),
-        elevation.to_radians(),
-    );
-    let h = sub(scale(view.side, az.cos()), scale(view.forward, az.sin()));
-    add(scale(h, el.cos()), scale(view.up, el.sin()))
+    direction(
+        view.up,
+        view.e1,
+        view.e2,
+        CAMERA_AZIMUTH_DEG - azimuth_from_camera,
+        elevation,
+    )
+}
+
+/// Unit direction `azimuth` degrees from `e1` towards `-e2` and `elevation` degrees up, for the
+/// unit horizontal axes `e1`, `e2` and `up`.
+fn direction(up: [f64; 3], e1: [f64; 3], e2: [f64; 3], azimuth: f64, elevation: f64) -> [f64; 3] {
+    let (az, el) = (azimuth.to_radians(), elevation.to_radians());
+    let h = sub(scale(e1, az.cos()), scale(e2, az.sin()));
+    add(scale(h, el.cos()), scale(up, el.sin()))
 }
 
 /// Runs povray on one scene inside `render_dir`; returns the PNG path.
@@ -570,11 +557,7 @@ fn render_frame(
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     };
-    let antialias = if args.antialias > 0.0 {
-        format!("+A{}", args.antialias)
-    } else {
-        "-A".to_string()
-    };
+    let antialias = antialias_flag(args.antialias);
     // Every output stream off but the fatal one, so a failure says why (`-GA` would hide that).
     let out = Command::new(povray)
         .current_dir(render_dir)
@@ -612,6 +595,15 @@ fn render_frame(
         png.display()
     );
     Ok(png)
+}
+
+/// The povray anti-aliasing option for `--antialias threshold` (0 turns it off).
+fn antialias_flag(threshold: f64) -> String {
+    if threshold > 0.0 {
+        format!("+A{threshold}")
+    } else {
+        "-A".to_string()
+    }
 }
 
 /// The first executable `program` in the PATH directories.
@@ -653,28 +645,6 @@ fn pov(p: [f64; 3]) -> String {
 fn finite(p: &[f64; 3]) -> bool {
     p.iter().all(|c| c.is_finite())
 }
-fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
 fn normalized(a: [f64; 3]) -> [f64; 3] {
     scale(a, 1.0 / norm(a))
 }
@@ -682,10 +652,6 @@ fn normalized(a: [f64; 3]) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn corners(b: Bounds) -> impl Iterator<Item = [f64; 3]> {
-        (0..8).map(move |c| [0, 1, 2].map(|k| if c >> k & 1 == 1 { b.max[k] } else { b.min[k] }))
-    }
 
     /// Every corner of the framed box projects inside the picture, for z-up and y-up runs and
     /// wide and tall pictures.
@@ -702,7 +668,7 @@ mod tests {
                 let right = normalized(cross(forward, v.up));
                 let cam_up = cross(right, forward);
                 let tan_x = (FOV_DEG.to_radians() / 2.0).tan();
-                for p in corners(b) {
+                for p in corners(&b) {
                     let rel = sub(p, v.location);
                     let depth = dot(rel, forward);
                     assert!(depth > 0.0, "corner {p:?} behind the camera");

@@ -47,7 +47,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let started = Instant::now();
     let scene = Scene::load(&args.scene)?;
     let setup = Setup::new(&scene, args.frames)?;
-    let info = setup.info.clone();
+    let info = &setup.info;
     let frames = setup.frames;
     eprintln!(
         "{}: {} particles, {} bonds, horizon {:.3e} m, dt {:.3e} s (stable limit {:.3e} s{}), \

@@ -8,12 +8,13 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
     /// The operating system refused an operation on `file`.
-    #[error("{}: {source}", file.display())]
+    #[error("{}: {cause}", file.display())]
     Io {
         /// The file being read or written.
         file: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error; quoted in the message, so not also returned as the error's
+        /// `source()` (printing the cause chain repeats nothing).
+        cause: std::io::Error,
     },
     /// The contents of `file` do not follow the format at `line` (1-based).
     #[error("{}:{line}: {message}", file.display())]
@@ -69,10 +70,10 @@ pub enum IoError {
 
 impl IoError {
     /// Wraps an `std::io::Error` with the path it concerns.
-    pub fn io(file: &Path, source: std::io::Error) -> IoError {
+    pub fn io(file: &Path, cause: std::io::Error) -> IoError {
         IoError::Io {
             file: file.to_path_buf(),
-            source,
+            cause,
         }
     }
 

@@ -50,4 +50,4 @@ pub use loads::Loads;
 pub use material::{ChenMaterial, ChenModel, ChenOptions, ForceModel, FractureParams, YieldParams};
 pub use math::{Real, Vec3};
 pub use particles::Discretization;
-pub use stable_step::{max_frequency, FrequencyEstimate};
+pub use stable_step::{max_frequency, stable_frequency, FrequencyEstimate};

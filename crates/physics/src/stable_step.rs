@@ -22,6 +22,25 @@ impl FrequencyEstimate {
     }
 }
 
+/// The highest angular frequency (rad/s) that sets the stable step of [`crate::TimeStep::Auto`],
+/// and the power iteration behind it: [`max_frequency`] with 100 iterations to a relative
+/// change of 1e-5, or `2 / dt` of [`ForceModel::silling_askari_step`] when the iteration finds
+/// no finite positive frequency. `rest` are the positions (m) it linearises at, `horizon` (m)
+/// the probe length.
+pub fn stable_frequency(
+    model: &mut dyn ForceModel,
+    rest: &[Vec3],
+    horizon: f64,
+) -> (f64, FrequencyEstimate) {
+    let est = max_frequency(model, rest, horizon, 100, 1e-5);
+    let omega = if est.omega_max.is_finite() && est.omega_max > 0.0 {
+        est.omega_max
+    } else {
+        2.0 / model.silling_askari_step()
+    };
+    (omega, est)
+}
+
 /// Power iteration on `M^-1 K`, `K` the stiffness of `model` linearised at `y0` by central
 /// differences of [`ForceModel::trial_forces`] (no internal state changes). `length` is a
 /// typical bond length (m) that sets the probe amplitude. Stops after `max_iterations` or when

@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 use perifrac_contact::{Colliders, ContactStats};
-use perifrac_physics::{ChenModel, Explicit, PhysicsError};
+use perifrac_physics::{ChenModel, Explicit, ForceModel, PhysicsError};
 use perifrac_topology::TetMesh;
 
 /// Wall time spent in each stage since the driver was made.
@@ -46,13 +46,12 @@ pub struct StepReport {
 }
 
 /// The simulation state of a running scene: the embedded mesh, the peridynamic solver, the
-/// colliders, and per-particle contact radii and masses. Made by [`crate::Setup::new`].
+/// colliders, and per-particle contact radii. Made by [`crate::Setup::new`].
 pub struct Driver {
     mesh: TetMesh,
     solver: Explicit<ChenModel>,
     colliders: Option<Colliders>,
     radii: Vec<f64>,
-    masses: Vec<f64>,
     /// Anchors to release, sorted by time.
     releases: Releases,
     next_release: usize,
@@ -62,14 +61,13 @@ pub struct Driver {
 }
 
 impl Driver {
-    /// Ties the pieces together. `radii` (m) and `masses` (kg) are per particle (= per tet);
+    /// Ties the pieces together. `radii` (m) are per particle (= per tet);
     /// `releases` lists anchor releases as (time in s, particles).
     pub(crate) fn new(
         mesh: TetMesh,
         solver: Explicit<ChenModel>,
         colliders: Option<Colliders>,
         radii: Vec<f64>,
-        masses: Vec<f64>,
         mut releases: Releases,
     ) -> Driver {
         releases.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -78,7 +76,6 @@ impl Driver {
             solver,
             colliders,
             radii,
-            masses,
             releases,
             next_release: 0,
             broken_bonds: 0,
@@ -96,7 +93,6 @@ impl Driver {
             solver,
             colliders,
             radii,
-            masses,
             times,
             ..
         } = self;
@@ -106,7 +102,7 @@ impl Driver {
         let broken_bonds = broken.len();
         let crack_faces = cut(mesh, broken);
         let t2 = Instant::now();
-        mesh.advect(solver.dt(), masses, solver.velocities());
+        mesh.advect(solver.dt(), solver.model().masses(), solver.velocities());
         let t3 = Instant::now();
         times.physics += t1 - t0;
         times.topology += t2 - t1;
@@ -156,7 +152,7 @@ impl Driver {
 
     /// Particle masses (kg).
     pub fn masses(&self) -> &[f64] {
-        &self.masses
+        self.solver.model().masses()
     }
 
     /// Particle contact radii (m).
@@ -167,8 +163,8 @@ impl Driver {
     /// Damage `phi` of every particle (0 intact, 1 all bonds broken); zeros without fracture.
     pub fn damage(&self) -> Vec<f64> {
         match self.solver.model().damage() {
-            Some(d) => (0..self.masses.len()).map(|i| d.phi(i)).collect(),
-            None => vec![0.0; self.masses.len()],
+            Some(d) => (0..self.radii.len()).map(|i| d.phi(i)).collect(),
+            None => vec![0.0; self.radii.len()],
         }
     }
 

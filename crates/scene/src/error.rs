@@ -4,15 +4,18 @@ use std::path::PathBuf;
 use thiserror::Error;
 
 /// Everything that can stop a scene from loading or running.
+///
+/// A variant that wraps another crate's error quotes it in its message and keeps it in a
+/// `cause` field, not as the error's `source()`, so printing the cause chain repeats nothing.
 #[derive(Debug, Error)]
 pub enum SceneError {
     /// The file cannot be read.
-    #[error("cannot read scene {file}: {source}")]
+    #[error("cannot read scene {file}: {cause}")]
     Read {
         /// The scene file.
         file: PathBuf,
         /// The OS error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// TOML syntax, an unknown key or a wrong type, at a line and column.
     #[error("{file}:{line}:{column}: {message}")]
@@ -45,12 +48,12 @@ pub enum SceneError {
         message: String,
     },
     /// The physics setup refused the scene.
-    #[error("{file}: {source}")]
+    #[error("{file}: {cause}")]
     Physics {
         /// The scene file.
         file: PathBuf,
         /// The physics crate's error.
-        source: perifrac_physics::PhysicsError,
+        cause: perifrac_physics::PhysicsError,
     },
     /// The output directory cannot be used.
     #[error("output directory {dir}: {message}")]
@@ -64,7 +67,7 @@ pub enum SceneError {
     #[error(transparent)]
     Io(#[from] perifrac_io::IoError),
     /// The run stopped (an instability); the frames written so far are kept.
-    #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {source}")]
+    #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
     Stopped {
         /// Simulated time (s).
         time: f64,
@@ -73,7 +76,7 @@ pub enum SceneError {
         /// Frames written and kept.
         frames: usize,
         /// What the solver reported.
-        source: perifrac_physics::PhysicsError,
+        cause: perifrac_physics::PhysicsError,
     },
 }
 

@@ -30,6 +30,6 @@ pub mod setup;
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use load::Scene;
-pub use output::{check_output_dir, FrameWriter, RunManifest, RUN_FORMAT};
+pub use output::{check_output_dir, FrameWriter, RunManifest, POVRAY_MESH_NAME, RUN_FORMAT};
 pub use run::{run, Observer, Progress, Silent, Summary};
 pub use setup::{OutputOptions, Setup, SetupInfo};

@@ -19,9 +19,9 @@ pub struct Scene {
 impl Scene {
     /// Reads and parses `path`.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Read {
             file: path.to_path_buf(),
-            source,
+            cause,
         })?;
         Scene::parse(&text, path)
     }

@@ -1,8 +1,9 @@
 //! The run directory: `scene.toml` (the scene as run), `run.json` (rewritten atomically after
 //! every frame, see [`RunManifest`]) and `frames/` with `surface_NNNN.ply` (binary PLY with the
-//! per-face `crack` flag), optionally `surface_NNNN.inc` (POV-Ray `mesh2` declaring `surface`)
-//! and `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`). Every file is written
-//! to a temporary name and renamed into place, so a reader never sees half a frame.
+//! per-face `crack` flag), optionally `surface_NNNN.inc` (POV-Ray `mesh2` declaring
+//! [`POVRAY_MESH_NAME`]) and `particles_NNNN.ply` (points with `damage`, `mass` and
+//! `fragment`). Every file is written to a temporary name and renamed into place, so a reader
+//! never sees half a frame.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -10,7 +11,7 @@ use std::time::Instant;
 
 use perifrac_io::{write_ply, write_ply_points, write_povray_mesh2, PlyEncoding, SurfaceRef};
 use perifrac_topology::Surface;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::driver::Driver;
 use crate::error::SceneError;
@@ -22,6 +23,9 @@ pub const RUN_FORMAT: &str = "perifrac-run/1";
 /// Share of the total mass that [`FrameJson::main_bounds`] frames: the heaviest fragments that
 /// together make up this much, so that a cloud of small debris does not shrink the picture.
 pub const MAIN_MASS_SHARE: f64 = 0.9;
+
+/// The identifier the `mesh2` of a frame's POV-Ray include is declared as.
+pub const POVRAY_MESH_NAME: &str = "surface";
 
 /// `run.json`: what the run wrote, for `perifrac render` and other readers. It holds no wall
 /// times, so two runs of one scene give identical files.
@@ -58,7 +62,7 @@ pub struct RunManifest {
 }
 
 /// A box (m).
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 pub struct Bounds {
     /// Lower corner.
     pub min: [f64; 3],
@@ -67,7 +71,7 @@ pub struct Bounds {
 }
 
 /// A ground plane in `run.json`.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct GroundJson {
     /// A point on it (m).
     pub point: [f64; 3],
@@ -76,7 +80,7 @@ pub struct GroundJson {
 }
 
 /// A ball at a frame.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
 pub struct BallJson {
     /// Centre (m).
     pub center: [f64; 3],
@@ -209,8 +213,7 @@ impl FrameWriter {
         last: bool,
     ) -> Result<&FrameJson, SceneError> {
         let started = Instant::now();
-        let surface = driver.mesh().surface();
-        let pieces = driver.mesh().pieces();
+        let (surface, pieces) = driver.mesh().surface_and_pieces();
         let name = format!("surface_{index:04}");
         let view = SurfaceRef {
             vertices: &surface.vertices,
@@ -225,7 +228,7 @@ impl FrameWriter {
         )?;
         let povray = if self.options.povray {
             let path = self.frames_dir.join(format!("{name}.inc"));
-            write_povray_mesh2(&path, &view, "surface")?;
+            write_povray_mesh2(&path, &view, POVRAY_MESH_NAME)?;
             Some(format!("frames/{name}.inc"))
         } else {
             None
@@ -363,15 +366,20 @@ fn main_bounds(surface: &Surface, piece_mass: &[f64]) -> Bounds {
             break;
         }
     }
-    let kept: Vec<[f64; 3]> = surface
+    let empty = Bounds {
+        min: [f64::INFINITY; 3],
+        max: [f64::NEG_INFINITY; 3],
+    };
+    surface
         .faces
         .iter()
         .zip(&surface.piece)
         .filter(|(_, &p)| keep[p as usize])
         .flat_map(|(face, _)| face.map(|v| surface.vertices[v as usize]))
-        .collect();
-    let (min, max) = bounds(&kept);
-    Bounds { min, max }
+        .fold(empty, |b, p| Bounds {
+            min: std::array::from_fn(|k| b.min[k].min(p[k])),
+            max: std::array::from_fn(|k| b.max[k].max(p[k])),
+        })
 }
 
 #[cfg(test)]

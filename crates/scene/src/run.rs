@@ -92,12 +92,12 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
     for frame in 0..=frames {
         if frame > 0 {
             for _ in 0..steps_per_frame {
-                if let Err(source) = driver.step() {
+                if let Err(cause) = driver.step() {
                     let stopped = SceneError::Stopped {
                         time: driver.solver().time(),
                         step: driver.solver().steps(),
                         frames: writer.frames_written(),
-                        source,
+                        cause,
                     };
                     writer.record_error(stopped.to_string())?;
                     return Err(stopped);

@@ -55,7 +55,8 @@ pub struct MeshSpec {
     pub cells: Option<[usize; 3]>,
     /// Cells across the longest side (boxes), or lattice resolution (surfaces, round primitives).
     pub resolution: Option<usize>,
-    /// Uniform scale applied to a file's coordinates (before `translate`).
+    /// Uniform scale applied to the mesh's coordinates, a file's or a primitive's (before
+    /// `translate`).
     pub scale: Option<f64>,
     /// Translation (m) applied last; boxes start at the origin, spheres are centred on it.
     pub translate: Option<[f64; 3]>,

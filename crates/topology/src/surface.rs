@@ -2,6 +2,7 @@
 
 use crate::faces::{cross, dot, FACE_CORNERS};
 use crate::mesh::{TetMesh, NO_TET};
+use crate::pieces::Pieces;
 
 /// A triangle surface in current positions, compacted to the vertices it uses.
 ///
@@ -51,13 +52,18 @@ impl Surface {
 impl TetMesh {
     /// The surface of all pieces together.
     pub fn surface(&self) -> Surface {
+        self.surface_and_pieces().0
+    }
+
+    /// [`TetMesh::surface`] and [`TetMesh::pieces`] from one computation of the pieces.
+    pub fn surface_and_pieces(&self) -> (Surface, Pieces) {
         let pieces = self.pieces();
         let mut map = vec![u32::MAX; self.pos.len()];
         let mut s = Surface::default();
         self.for_each_surface_face(|t, face, crack| {
             s.push(&mut map, &self.pos, face, crack, pieces.piece_of_tet[t]);
         });
-        s
+        (s, pieces)
     }
 
     /// One surface per piece, indexed by piece id.

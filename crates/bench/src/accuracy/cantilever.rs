@@ -11,20 +11,17 @@
 
 use std::time::Instant;
 
-use perifrac_fem::{static_linear, Material, Mesh, Problem, Sampler};
-use perifrac_physics::{ChenMaterial, Loads};
-use perifrac_topology::primitives::bar_data;
+use perifrac_fem::{static_linear, Sampler};
+use perifrac_physics::{ChenModel, Explicit, Loads};
 
-use super::{table_and_plot, CaseReport, Run, HORIZON_FACTORS};
-use crate::bar::{clamped_bar, fit_line};
+use super::{
+    clamped_fem_bar, material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH,
+    POISSON, SIDE, YOUNG,
+};
+use crate::bar::{cells_across, clamped_bar, fit_line, rest_of};
 use crate::{BenchError, Effort};
 
-const YOUNG: f64 = 1e8;
-const POISSON: f64 = 0.3;
-const DENSITY: f64 = 1000.0;
 const GRAVITY: f64 = 9.81;
-const LENGTH: f64 = 1.0;
-const SIDE: f64 = 0.1;
 /// Euler-Bernoulli tip deflection `q L^4 / (8 E I)` (m), quoted in issue 6.
 pub const EULER_BERNOULLI: f64 = 0.014715;
 /// Timoshenko tip deflection (m), quoted in issue 6.
@@ -41,33 +38,26 @@ fn omega1() -> f64 {
 /// Tip deflection (m) by peridynamics with `nx` cells along the bar and horizon factor `k`.
 fn peridynamics(nx: usize, k: f64) -> Result<(Run, f64), BenchError> {
     let started = Instant::now();
-    let n = (nx / 10).max(1);
+    let n = cells_across(nx);
     let h = LENGTH / nx as f64;
     let case = format!("cantilever PD {nx}x{n}x{n} k={k}");
-    let material = ChenMaterial::from_young_poisson(YOUNG, POISSON, DENSITY).map_err(|source| {
-        BenchError::Physics {
-            case: case.clone(),
-            source,
-        }
-    })?;
-    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &material)?;
-    let bonds = b.bonds;
+    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &material(&case)?)?;
+    let bonds = b.bonds();
     let tip = b.select(|x| x[0] > LENGTH - 2.0 * h);
-    let rest = b.rest.clone();
     let w1 = omega1();
-    let physics = |source| BenchError::Physics {
+    let physics = |cause| BenchError::Physics {
         case: case.clone(),
-        source,
+        cause,
     };
-    let mut loads = Loads::new(rest.len())
+    let mut loads = Loads::new(b.rest().len())
         .with_gravity([0.0, 0.0, -GRAVITY])
         .with_damping(2.0 * w1)
         .map_err(physics)?;
     loads.anchor(&held, [0.0; 3]).map_err(physics)?;
     let mut s = b.solver(&case, loads)?;
     let steps = (12.0 / w1 / s.dt()).ceil() as u64;
-    let deflection = |s: &perifrac_physics::Explicit<perifrac_physics::ChenModel>| {
-        let y = s.positions();
+    let deflection = |s: &Explicit<ChenModel>| {
+        let (y, rest) = (s.positions(), rest_of(s));
         let x: Vec<f64> = tip.iter().map(|&i| rest[i as usize][0]).collect();
         let uz: Vec<f64> = tip
             .iter()
@@ -85,14 +75,8 @@ fn peridynamics(nx: usize, k: f64) -> Result<(Run, f64), BenchError> {
     }
     let value = deflection(&s);
     let run = Run {
-        method: "PD".into(),
-        resolution: format!("{nx}x{n}x{n}"),
-        horizon_factor: Some(k),
-        wall_s: started.elapsed().as_secs_f64(),
-        steps,
-        size: bonds,
         value,
-        error: 0.0,
+        ..Run::peridynamics([nx, n, n], k, started, steps, bonds)
     };
     Ok((run, (value - at_90).abs() / value))
 }
@@ -100,24 +84,14 @@ fn peridynamics(nx: usize, k: f64) -> Result<(Run, f64), BenchError> {
 /// Tip deflection (m) by linear elasticity on `nx` cells along the bar, P1 or P2.
 fn finite_elements(nx: usize, quadratic: bool) -> Result<Run, BenchError> {
     let started = Instant::now();
-    let n = (nx / 10).max(1);
+    let n = cells_across(nx);
     let case = format!("cantilever FEM {nx}x{n}x{n}");
-    let fem = |source| BenchError::Fem {
+    let fem = |cause| BenchError::Fem {
         case: case.clone(),
-        source,
+        cause,
     };
-    let (v, t) = bar_data(LENGTH, [SIDE, SIDE], nx);
-    let mesh = if quadratic {
-        Mesh::quadratic(v, t)
-    } else {
-        Mesh::linear(v, t)
-    }
-    .map_err(fem)?;
-    let material = Material::new(YOUNG, POISSON, DENSITY).map_err(fem)?;
-    let mut problem = Problem::new(mesh, material)
-        .map_err(fem)?
-        .with_gravity([0.0, 0.0, -GRAVITY]);
-    problem.fix_where(|x| x[0] <= 1e-12);
+    let problem =
+        clamped_fem_bar(nx, quadratic, YOUNG, POISSON, [0.0, 0.0, -GRAVITY]).map_err(fem)?;
     let solution = static_linear(&problem).map_err(fem)?;
     let sampler = Sampler::new(problem.mesh(), &[[LENGTH, 0.0, 0.0]]).map_err(fem)?;
     let u = sampler.interpolate(&solution.displacements)[0];

@@ -6,6 +6,12 @@ mod cantilever;
 mod motion;
 mod waves;
 
+use std::time::Instant;
+
+use perifrac_fem::{FemError, Material, Mesh, Problem};
+use perifrac_physics::{ChenMaterial, Vec3};
+use perifrac_topology::primitives::bar_data;
+
 use crate::plot::{Plot, Series};
 use crate::table::Table;
 use crate::{BenchError, Effort};
@@ -16,6 +22,46 @@ pub use waves::{moduli, wave_speed};
 
 /// The horizon factors every peridynamic sweep runs (the 1.0, 1.5, 2.0).
 pub const HORIZON_FACTORS: [f64; 3] = [1.0, 1.5, 2.0];
+
+/// Length (m) of the cantilever's and the motion cases' bar.
+const LENGTH: f64 = 1.0;
+/// Side (m) of every case's square section.
+const SIDE: f64 = 0.1;
+/// Young's modulus (Pa) of the cantilever's material, which the moduli and wave cases share.
+const YOUNG: f64 = 1e8;
+/// Poisson's ratio of that material.
+const POISSON: f64 = 0.3;
+/// Density (kg/m^3) of every case's material.
+const DENSITY: f64 = 1000.0;
+
+/// The material of [`YOUNG`], [`POISSON`] and [`DENSITY`]; a refusal is an error of `case`.
+fn material(case: &str) -> Result<ChenMaterial, BenchError> {
+    ChenMaterial::from_young_poisson(YOUNG, POISSON, DENSITY).map_err(|cause| BenchError::Physics {
+        case: case.into(),
+        cause,
+    })
+}
+
+/// The [`LENGTH`] x [`SIDE`] x [`SIDE`] bar of `nx` cells along in quadratic or linear tets of
+/// `young` (Pa), `poisson` and [`DENSITY`], under `gravity` (m/s^2), clamped at x = 0.
+fn clamped_fem_bar(
+    nx: usize,
+    quadratic: bool,
+    young: f64,
+    poisson: f64,
+    gravity: Vec3,
+) -> Result<Problem, FemError> {
+    let (v, t) = bar_data(LENGTH, [SIDE, SIDE], nx);
+    let mesh = if quadratic {
+        Mesh::quadratic(v, t)
+    } else {
+        Mesh::linear(v, t)
+    }?;
+    let material = Material::new(young, poisson, DENSITY)?;
+    let mut problem = Problem::new(mesh, material)?.with_gravity(gravity);
+    problem.fix_where(|x| x[0] <= 1e-12);
+    Ok(problem)
+}
 
 /// One run of one method at one resolution.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,6 +82,23 @@ pub struct Run {
     pub value: f64,
     /// Relative error against the case's reference.
     pub error: f64,
+}
+
+impl Run {
+    /// A peridynamic run (`"PD"`) on `cells` with horizon factor `k`, started at `started`:
+    /// its cost, value and error 0 for the caller to set.
+    fn peridynamics(cells: [usize; 3], k: f64, started: Instant, steps: u64, bonds: usize) -> Run {
+        Run {
+            method: "PD".into(),
+            resolution: format!("{}x{}x{}", cells[0], cells[1], cells[2]),
+            horizon_factor: Some(k),
+            wall_s: started.elapsed().as_secs_f64(),
+            steps,
+            size: bonds,
+            value: 0.0,
+            error: 0.0,
+        }
+    }
 }
 
 /// What a case reports: prose, a table of runs, a plot of error against wall time.

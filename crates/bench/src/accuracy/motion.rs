@@ -12,17 +12,14 @@
 
 use std::time::Instant;
 
-use perifrac_fem::{critical_time_step, Dynamic, Kinematics, Material, Mesh, Problem, Sampler};
+use perifrac_fem::{critical_time_step, Dynamic, Kinematics, Problem, Sampler};
 use perifrac_physics::{ChenMaterial, Loads, Vec3};
-use perifrac_topology::primitives::bar_data;
 
-use super::{table_and_plot, CaseReport, Run, HORIZON_FACTORS};
-use crate::bar::clamped_bar;
+use super::{
+    clamped_fem_bar, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH, SIDE,
+};
+use crate::bar::{cells_across, clamped_bar, rest_of, set_velocities};
 use crate::{BenchError, Effort};
-
-const LENGTH: f64 = 1.0;
-const SIDE: f64 = 0.1;
-const DENSITY: f64 = 1000.0;
 /// Diagonal of the bar's bounding box (m): the paper's length scale for the deviation.
 fn diagonal() -> f64 {
     (LENGTH * LENGTH + 2.0 * SIDE * SIDE).sqrt()
@@ -44,12 +41,16 @@ impl Motion {
         }
     }
 
+    /// The material of Table 1.
+    fn material(self) -> ChenMaterial {
+        let (kappa, mu) = self.moduli();
+        ChenMaterial::elastic(kappa, mu, DENSITY)
+    }
+
+    /// Young's modulus (Pa) and Poisson's ratio of [`Motion::material`].
     fn young_poisson(self) -> (f64, f64) {
-        let (k, m) = self.moduli();
-        (
-            9.0 * k * m / (3.0 * k + m),
-            (3.0 * k - 2.0 * m) / (2.0 * (3.0 * k + m)),
-        )
+        let m = self.material();
+        (m.young(), m.poisson())
     }
 
     fn gravity(self) -> Vec3 {
@@ -105,18 +106,12 @@ impl Reference {
     fn run(motion: Motion, nx: usize, dt_fraction: f64) -> Result<Reference, BenchError> {
         let started = Instant::now();
         let case = format!("{} FEM P2 {nx} cells", motion.name());
-        let fem = |source| BenchError::Fem {
+        let fem = |cause| BenchError::Fem {
             case: case.clone(),
-            source,
+            cause,
         };
-        let (v, t) = bar_data(LENGTH, [SIDE, SIDE], nx);
-        let mesh = Mesh::quadratic(v, t).map_err(fem)?;
         let (e, nu) = motion.young_poisson();
-        let material = Material::new(e, nu, DENSITY).map_err(fem)?;
-        let mut problem = Problem::new(mesh, material)
-            .map_err(fem)?
-            .with_gravity(motion.gravity());
-        problem.fix_where(|x| x[0] <= 1e-12);
+        let problem = clamped_fem_bar(nx, true, e, nu, motion.gravity()).map_err(fem)?;
         let dt = dt_fraction * critical_time_step(&problem, 60);
         let nodes = problem.mesh().nodes().to_vec();
         let mut displacements = Vec::with_capacity(SAMPLES);
@@ -150,9 +145,9 @@ impl Reference {
     /// Positions of the rest points `points` (inside the bar) at each sample time.
     fn at(&self, points: &[Vec3]) -> Result<Trajectory, BenchError> {
         let sampler =
-            Sampler::new(self.problem.mesh(), points).map_err(|source| BenchError::Fem {
+            Sampler::new(self.problem.mesh(), points).map_err(|cause| BenchError::Fem {
                 case: "sampling the reference".into(),
-                source,
+                cause,
             })?;
         Ok(self
             .displacements
@@ -188,26 +183,26 @@ fn peridynamics(
     k: f64,
 ) -> Result<(Run, Vec<Vec3>, Trajectory), BenchError> {
     let started = Instant::now();
-    let n = (nx / 10).max(1);
+    let n = cells_across(nx);
     let case = format!("{} PD {nx}x{n}x{n} k={k}", motion.name());
-    let physics = |source| BenchError::Physics {
+    let physics = |cause| BenchError::Physics {
         case: case.clone(),
-        source,
+        cause,
     };
-    let (kappa, mu) = motion.moduli();
-    let material = ChenMaterial::elastic(kappa, mu, DENSITY);
-    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &material)?;
-    let bonds = b.bonds;
+    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &motion.material())?;
+    let bonds = b.bonds();
     let tracked: Vec<u32> = b.select(|x| x[0] > 0.0);
-    let rest = b.rest.clone();
-    let mut loads = Loads::new(rest.len()).with_gravity(motion.gravity());
+    let mut loads = Loads::new(b.rest().len()).with_gravity(motion.gravity());
     loads.anchor(&held, [0.0; 3]).map_err(physics)?;
     let mut s = b.solver(&case, loads)?;
-    for (v, x) in s.velocities_mut().iter_mut().zip(&rest) {
+    // The clamp layer behind x = 0 starts, and stays, at rest.
+    set_velocities(&mut s, |x| {
         if x[0] > 0.0 {
-            *v = motion.velocity(*x);
+            motion.velocity(x)
+        } else {
+            [0.0; 3]
         }
-    }
+    });
     let per_sample = (motion.duration() / SAMPLES as f64 / s.dt()).ceil() as u64;
     let mut out = Vec::with_capacity(SAMPLES);
     for _ in 0..SAMPLES {
@@ -217,17 +212,9 @@ fn peridynamics(
         let y = s.positions();
         out.push(tracked.iter().map(|&i| y[i as usize]).collect());
     }
+    let rest = rest_of(&s);
     let points = tracked.iter().map(|&i| rest[i as usize]).collect();
-    let run = Run {
-        method: "PD".into(),
-        resolution: format!("{nx}x{n}x{n}"),
-        horizon_factor: Some(k),
-        wall_s: started.elapsed().as_secs_f64(),
-        steps: per_sample * SAMPLES as u64,
-        size: bonds,
-        value: 0.0,
-        error: 0.0,
-    };
+    let run = Run::peridynamics([nx, n, n], k, started, per_sample * SAMPLES as u64, bonds);
     Ok((run, points, out))
 }
 
@@ -236,8 +223,8 @@ fn motion_case(
     effort: Effort,
     progress: &mut dyn FnMut(&str),
 ) -> Result<CaseReport, BenchError> {
-    // Torsion needs a finer reference than bending: the twisting bar's P2 answer moved by 1.8%
-    // of the diagonal from 20 to 40 cells along, and by 0.65% from 40 to 80.
+    // Torsion needs a finer reference than bending: the twisting bar's P2 answer moved by 0.69%
+    // of the diagonal from 40 to 80 cells along.
     let (levels, factors, fem_nx): (&[usize], &[f64], usize) = match (effort, motion) {
         (Effort::Tiny, _) => (&[20], &[1.5], 10),
         (Effort::Full, Motion::Swing) => (&[20, 30, 40, 60], &HORIZON_FACTORS, 20),

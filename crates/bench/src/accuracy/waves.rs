@@ -7,16 +7,13 @@
 
 use std::time::Instant;
 
-use perifrac_physics::{ChenMaterial, ChenModel, Explicit, Loads};
+use perifrac_physics::{ChenModel, Explicit, Loads};
 
-use super::{table_and_plot, CaseReport, Run, HORIZON_FACTORS};
-use crate::bar::{block, fit_line, Body};
+use super::{
+    material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, POISSON, SIDE, YOUNG,
+};
+use crate::bar::{block, fit_line, rest_of, set_velocities, Body};
 use crate::{BenchError, Effort};
-
-const YOUNG: f64 = 1e8;
-const POISSON: f64 = 0.3;
-const DENSITY: f64 = 1000.0;
-const SIDE: f64 = 0.1;
 
 /// A `len` x 0.1 x 0.1 m bar of the cases' material from the origin, `nx` cells along and
 /// `nx / per_cell_across` across.
@@ -27,14 +24,8 @@ fn bar(
     per_cell_across: usize,
     k: f64,
 ) -> Result<Body, BenchError> {
-    let material = ChenMaterial::from_young_poisson(YOUNG, POISSON, DENSITY).map_err(|source| {
-        BenchError::Physics {
-            case: case.into(),
-            source,
-        }
-    })?;
     let n = (nx / per_cell_across).max(1);
-    block(case, [len, SIDE, SIDE], [nx, n, n], k, &material)
+    block(case, [len, SIDE, SIDE], [nx, n, n], k, &material(case)?)
 }
 
 /// Measured `(E / E0, nu)` and the run's cost: a 0.4 x 0.1 x 0.1 m bar of `nx` cells along,
@@ -47,25 +38,25 @@ fn tension(nx: usize, k: f64) -> Result<(f64, f64, Run), BenchError> {
     let n = (nx / 4).max(1);
     let case = format!("tension PD {nx}x{n}x{n} k={k}");
     let b = bar(&case, len, nx, 4, k)?;
-    let delta = b.horizon;
-    let (bonds, rest) = (b.bonds, b.rest.clone());
+    let delta = b.horizon();
+    let bonds = b.bonds();
     let left = b.select(|x| x[0] < delta);
     let right = b.select(|x| x[0] > len - delta);
     let omega1 = std::f64::consts::PI * (YOUNG / DENSITY).sqrt() / len;
-    let physics = |source| BenchError::Physics {
+    let physics = |cause| BenchError::Physics {
         case: case.clone(),
-        source,
+        cause,
     };
-    let mut loads = Loads::new(rest.len())
+    let mut loads = Loads::new(b.rest().len())
         .with_damping(2.0 * omega1)
         .map_err(physics)?;
     loads.anchor(&left, [0.0; 3]).map_err(physics)?;
     loads.anchor(&right, [0.0; 3]).map_err(physics)?;
-    let mut s = b.solver(&case, loads)?;
     // Start from the affine answer with the nominal contraction; the relaxation finds the rest.
     let eps = 1e-3;
     let c = SIDE / 2.0;
-    let start: Vec<[f64; 3]> = rest
+    let start: Vec<[f64; 3]> = b
+        .rest()
         .iter()
         .map(|p| {
             [
@@ -75,12 +66,13 @@ fn tension(nx: usize, k: f64) -> Result<(f64, f64, Run), BenchError> {
             ]
         })
         .collect();
+    let mut s = b.solver(&case, loads)?;
     s.set_positions(&start);
     let steps = (40.0 / omega1 / s.dt()).ceil() as u64;
     for _ in 0..steps {
         s.step().map_err(physics)?;
     }
-    let y = s.positions();
+    let (y, rest) = (s.positions(), rest_of(&s));
     let mid: Vec<usize> = (0..rest.len())
         .filter(|&i| (rest[i][0] - len / 2.0).abs() < len / 6.0)
         .collect();
@@ -93,16 +85,7 @@ fn tension(nx: usize, k: f64) -> Result<(f64, f64, Run), BenchError> {
     let eyy = 0.5 * (slope(1) + slope(2));
     let reaction: f64 = right.iter().map(|&i| s.forces()[i as usize][0]).sum();
     let stress = -reaction / (SIDE * SIDE);
-    let run = Run {
-        method: String::new(),
-        resolution: format!("{nx}x{n}x{n}"),
-        horizon_factor: Some(k),
-        wall_s: started.elapsed().as_secs_f64(),
-        steps,
-        size: bonds,
-        value: 0.0,
-        error: 0.0,
-    };
+    let run = Run::peridynamics([nx, n, n], k, started, steps, bonds);
     Ok((stress / exx / YOUNG, -eyy / exx, run))
 }
 
@@ -140,7 +123,7 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
          damping of the first axial mode): the stress is the pulled layer's reaction over the \
          section, the strains are fitted over the middle third. The reference is the input, \
          E = {YOUNG:e} Pa and nu = {POISSON}; the two rows of a run share its cost. A section of \
-         4 to 8 cells is 2 to 5 horizons across, so the particles near the surface, whose \
+         4 to 8 cells is 1.6 to 6.3 horizons across, so the particles near the surface, whose \
          families are cut, weigh in (calibration makes them stiffer, MODEL.md's constants \
          softer: docs/DECISIONS.md)."
     );
@@ -184,22 +167,22 @@ fn pulse(nx: usize, k: f64) -> Result<Run, BenchError> {
     let h = len / nx as f64;
     let case = format!("wave PD {nx}x{n}x{n} k={k}");
     let b = bar(&case, len, nx, 20, k)?;
-    let bonds = b.bonds;
+    let bonds = b.bonds();
     let probe = |at: f64| b.select(move |x| (x[0] - at).abs() < 0.5 * h);
     let (p1, p2) = (probe(0.6), probe(1.4));
-    let rest = b.rest.clone();
-    let mut s = b.solver(&case, Loads::new(rest.len()))?;
+    let loads = Loads::new(b.rest().len());
+    let mut s = b.solver(&case, loads)?;
     let sigma = 0.25;
-    for (v, p) in s.velocities_mut().iter_mut().zip(&rest) {
-        v[0] = (-0.5 * (p[0] / sigma).powi(2)).exp();
-    }
+    set_velocities(&mut s, |p| {
+        [(-0.5 * (p[0] / sigma).powi(2)).exp(), 0.0, 0.0]
+    });
     let c0 = (YOUNG / DENSITY).sqrt();
     let steps = (0.9 * len / c0 / s.dt()).ceil() as u64;
     let (mut h1, mut h2) = (vec![mean_vx(&s, &p1)], vec![mean_vx(&s, &p2)]);
     for _ in 0..steps {
-        s.step().map_err(|source| BenchError::Physics {
+        s.step().map_err(|cause| BenchError::Physics {
             case: case.clone(),
-            source,
+            cause,
         })?;
         h1.push(mean_vx(&s, &p1));
         h2.push(mean_vx(&s, &p2));
@@ -207,14 +190,9 @@ fn pulse(nx: usize, k: f64) -> Result<Run, BenchError> {
     let dt = s.dt();
     let speed = 0.8 / (half_peak_arrival(&h2, dt) - half_peak_arrival(&h1, dt));
     Ok(Run {
-        method: "PD".into(),
-        resolution: format!("{nx}x{n}x{n}"),
-        horizon_factor: Some(k),
-        wall_s: started.elapsed().as_secs_f64(),
-        steps,
-        size: bonds,
         value: speed,
         error: speed / c0 - 1.0,
+        ..Run::peridynamics([nx, n, n], k, started, steps, bonds)
     })
 }
 

@@ -11,7 +11,7 @@ use crate::error::PhysicsError;
 use crate::loads::Loads;
 use crate::material::ForceModel;
 use crate::math::{dot, Vec3};
-use crate::stable_step::{max_frequency, FrequencyEstimate};
+use crate::stable_step::{stable_frequency, FrequencyEstimate};
 use rayon::prelude::*;
 
 /// How the step is chosen.
@@ -110,13 +110,8 @@ impl<M: ForceModel> Explicit<M> {
         let (dt, estimate) = match config.dt {
             TimeStep::Fixed(dt) => (dt, None),
             TimeStep::Auto { safety } => {
-                let est = max_frequency(&mut model, rest, horizon, 100, 1e-5);
-                let limit = if est.omega_max.is_finite() && est.omega_max > 0.0 {
-                    est.critical_step()
-                } else {
-                    model.silling_askari_step()
-                };
-                (safety * limit, Some(est))
+                let (omega, est) = stable_frequency(&mut model, rest, horizon);
+                (safety * (2.0 / omega), Some(est))
             }
         };
         if !(dt.is_finite() && dt > 0.0) {

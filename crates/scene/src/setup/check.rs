@@ -6,7 +6,7 @@ use crate::error::SceneError;
 use crate::schema::{Region, SceneFile};
 
 use super::defaults;
-use super::math::norm;
+use perifrac_physics::math::norm;
 
 /// The scene file a message names.
 pub(super) struct Ctx<'a> {
@@ -16,10 +16,10 @@ pub(super) struct Ctx<'a> {
 
 impl Ctx<'_> {
     /// The physics crate refused something; the message names the scene file.
-    pub(super) fn physics(&self, source: perifrac_physics::PhysicsError) -> SceneError {
+    pub(super) fn physics(&self, cause: perifrac_physics::PhysicsError) -> SceneError {
         SceneError::Physics {
             file: self.file.to_path_buf(),
-            source,
+            cause,
         }
     }
     pub(super) fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
@@ -67,7 +67,9 @@ impl Ctx<'_> {
     }
 }
 
-/// Checks every number that does not need the mesh, so that a typo fails before meshing.
+/// Checks the settings that need neither the mesh nor the built materials, so that a typo fails
+/// before meshing; the material moduli, fracture and anisotropy settings are checked when the
+/// materials are built (`material.rs`), the time step once the stable limit is known.
 pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError> {
     let sim = &f.simulation;
     ctx.positive("simulation.duration", sim.duration, "s")?;
@@ -125,7 +127,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         if let Some(nrm) = gr.normal {
             ctx.direction(&format!("{key}.normal"), nrm)?;
         }
-        contact_params(
+        check_contact(
             ctx,
             &key,
             gr.stiffness_factor,
@@ -149,7 +151,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         if let Some(d) = b.density {
             ctx.positive(&format!("{key}.density"), d, "kg/m^3")?;
         }
-        contact_params(ctx, &key, b.stiffness_factor, b.damping_ratio, b.friction)?;
+        check_contact(ctx, &key, b.stiffness_factor, b.damping_ratio, b.friction)?;
     }
     for (i, a) in f.anchor.iter().enumerate() {
         ctx.region(&format!("anchor[{i}].region"), &a.region)?;
@@ -187,23 +189,32 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
     Ok(())
 }
 
-/// Validated contact coefficients `(stiffness factor, damping ratio, friction)`.
-pub(super) fn contact_params(
+/// A collider's contact coefficients with the defaults filled in: `(stiffness factor, damping
+/// ratio, friction)`, all dimensionless.
+pub(super) fn contact_coefficients(
+    stiffness: Option<f64>,
+    damping: Option<f64>,
+    friction: Option<f64>,
+) -> (f64, f64, f64) {
+    (
+        stiffness.unwrap_or(defaults::STIFFNESS_FACTOR),
+        damping.unwrap_or(defaults::DAMPING_RATIO),
+        friction.unwrap_or(defaults::FRICTION),
+    )
+}
+
+/// Refuses a collider's contact coefficients (see [`contact_coefficients`]) that are not
+/// usable: a stiffness factor that is not positive, a negative damping ratio or friction.
+fn check_contact(
     ctx: &Ctx,
     key: &str,
     stiffness: Option<f64>,
     damping: Option<f64>,
     friction: Option<f64>,
-) -> Result<(f64, f64, f64), SceneError> {
-    let k = stiffness.unwrap_or(defaults::STIFFNESS_FACTOR);
+) -> Result<(), SceneError> {
+    let (k, d, mu) = contact_coefficients(stiffness, damping, friction);
     ctx.positive(&format!("{key}.stiffness_factor"), k, "")?;
-    let d = ctx.non_negative(
-        &format!("{key}.damping_ratio"),
-        damping.unwrap_or(defaults::DAMPING_RATIO),
-    )?;
-    let mu = ctx.non_negative(
-        &format!("{key}.friction"),
-        friction.unwrap_or(defaults::FRICTION),
-    )?;
-    Ok((k, d, mu))
+    ctx.non_negative(&format!("{key}.damping_ratio"), d)?;
+    ctx.non_negative(&format!("{key}.friction"), mu)?;
+    Ok(())
 }

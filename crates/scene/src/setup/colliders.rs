@@ -9,7 +9,7 @@ use perifrac_topology::TetMesh;
 use crate::error::SceneError;
 use crate::schema::SceneFile;
 
-use super::check::{contact_params, Ctx};
+use super::check::{contact_coefficients, Ctx};
 
 /// What the colliders add to the highest frequency of the system, for the stable step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -35,33 +35,23 @@ pub(super) fn build_colliders(
     if f.ground.is_empty() && f.ball.is_empty() {
         return Ok(None);
     }
-    let mut grounds = Vec::new();
+    // The coefficients were checked with the rest of the settings (check::check_settings).
+    let params = |factor, damping, friction| {
+        let (k, d, mu) = contact_coefficients(factor, damping, friction);
+        ContactParams::from_material(young, radius, k, d, mu)
+    };
     let mut stiffness = ContactStiffness::default();
-    for (i, g) in f.ground.iter().enumerate() {
-        let (k, d, mu) = contact_params(
-            ctx,
-            &format!("ground[{i}]"),
-            g.stiffness_factor,
-            g.damping_ratio,
-            g.friction,
-        )?;
-        let params = ContactParams::from_material(young, radius, k, d, mu);
-        stiffness.per_particle += params.stiffness;
-        grounds.push(GroundDesc {
+    let grounds: Vec<GroundDesc> = f
+        .ground
+        .iter()
+        .map(|g| GroundDesc {
             point: g.point.unwrap_or([0.0; 3]),
             normal: g.normal.unwrap_or([0.0, 0.0, 1.0]),
-            params,
-        });
-    }
+            params: params(g.stiffness_factor, g.damping_ratio, g.friction),
+        })
+        .collect();
     let mut balls = Vec::new();
-    for (i, b) in f.ball.iter().enumerate() {
-        let (k, d, mu) = contact_params(
-            ctx,
-            &format!("ball[{i}]"),
-            b.stiffness_factor,
-            b.damping_ratio,
-            b.friction,
-        )?;
+    for b in &f.ball {
         let velocity = b.velocity.unwrap_or([0.0; 3]);
         let mass = b
             .mass
@@ -70,8 +60,7 @@ pub(super) fn build_colliders(
             Some(mass) => BallMotion::Dynamic { mass, velocity },
             None => BallMotion::Kinematic { velocity },
         };
-        let params = ContactParams::from_material(young, radius, k, d, mu);
-        stiffness.per_particle += params.stiffness;
+        let params = params(b.stiffness_factor, b.damping_ratio, b.friction);
         if let Some(m) = mass {
             let touching = 4.0 * ((b.radius + radius) / radius).powi(2);
             stiffness.ball_omega2 = stiffness.ball_omega2.max(touching * params.stiffness / m);
@@ -83,6 +72,11 @@ pub(super) fn build_colliders(
             params,
         });
     }
+    stiffness.per_particle = grounds
+        .iter()
+        .map(|g| g.params.stiffness)
+        .chain(balls.iter().map(|b| b.params.stiffness))
+        .sum();
     Colliders::new(grounds, balls, gravity)
         .map(|c| Some((c, stiffness)))
         .map_err(|e| ctx.err("ball/ground", e.to_string()))

@@ -7,7 +7,9 @@ use crate::error::SceneError;
 use crate::schema::{Region, SceneFile};
 
 use super::check::Ctx;
-use super::math::{bounds, cross};
+use perifrac_physics::math::cross;
+
+use super::math::bounds;
 
 /// Loads of the scene and the anchor releases as (time in s, particles).
 pub(super) fn loads(

@@ -1,18 +1,6 @@
-//! Small vector helpers of the setup.
+//! Small geometric helpers of the setup (vector algebra is `perifrac_physics::math`).
 
-/// Length of `v`.
-pub(super) fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
-/// `a x b`.
-pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
+use perifrac_physics::math::norm;
 
 /// Axis-aligned bounds of `points` (infinite, inverted bounds when empty).
 pub(crate) fn bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {

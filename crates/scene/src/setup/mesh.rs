@@ -4,7 +4,7 @@
 use perifrac_physics::NO_NEIGHBOUR;
 use perifrac_topology::faces::FACE_CORNERS;
 use perifrac_topology::mesher::{cylinder_surface, mesh_surface, sphere_surface, MesherOptions};
-use perifrac_topology::{primitives, TetMesh};
+use perifrac_topology::{primitives, TetMesh, NO_TET};
 
 use crate::error::SceneError;
 use crate::load::Scene;
@@ -137,11 +137,22 @@ pub(super) fn precracks(
     mesh: &mut TetMesh,
     rest: &[[f64; 3]],
 ) -> Result<(Vec<[u32; 4]>, usize), SceneError> {
-    let mut adjacency = mesh.neighbours().to_vec();
     let mut faces = 0;
     for (k, pc) in f.precrack.iter().enumerate() {
-        faces += precrack(ctx, k, pc, mesh, rest, &mut adjacency)?;
+        faces += precrack(ctx, k, pc, mesh, rest)?;
     }
+    // A cracked face is marked on both sides, so hiding it per side hides the pair.
+    let adjacency = (0..mesh.num_tets())
+        .map(|t| {
+            let mut adj = mesh.neighbours()[t];
+            for (face, u) in adj.iter_mut().enumerate() {
+                if mesh.is_cracked(t as u32, face as u8) {
+                    *u = NO_NEIGHBOUR;
+                }
+            }
+            adj
+        })
+        .collect();
     if faces > 0 {
         mesh.split();
     }
@@ -155,7 +166,6 @@ fn precrack(
     pc: &PrecrackSpec,
     mesh: &mut TetMesh,
     rest: &[[f64; 3]],
-    adjacency: &mut [[u32; 4]],
 ) -> Result<usize, SceneError> {
     let n = ctx.direction(&format!("precrack[{k}].normal"), pc.normal)?;
     let side = |x: [f64; 3]| {
@@ -164,7 +174,7 @@ fn precrack(
     let mut cut = Vec::new();
     for (t, adj) in mesh.neighbours().iter().enumerate() {
         for (face, &u) in adj.iter().enumerate() {
-            if u == NO_NEIGHBOUR || (u as usize) < t {
+            if u == NO_TET || (u as usize) < t {
                 continue;
             }
             let (a, b) = (side(rest[t]), side(rest[u as usize]));
@@ -180,7 +190,7 @@ fn precrack(
                 }
             }
             if pc.region.contains(c) {
-                cut.push((t as u32, face as u8, u));
+                cut.push((t as u32, face as u8));
             }
         }
     }
@@ -190,19 +200,9 @@ fn precrack(
             "cuts no face (the plane does not pass between tets inside the region)",
         ));
     }
-    for &(t, face, u) in &cut {
+    for &(t, face) in &cut {
         mesh.crack_face(t, face)
             .map_err(|e| ctx.err(format!("precrack[{k}]"), e.to_string()))?;
-        for slot in adjacency[t as usize].iter_mut() {
-            if *slot == u {
-                *slot = NO_NEIGHBOUR;
-            }
-        }
-        for slot in adjacency[u as usize].iter_mut() {
-            if *slot == t {
-                *slot = NO_NEIGHBOUR;
-            }
-        }
     }
     Ok(cut.len())
 }

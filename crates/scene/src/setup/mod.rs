@@ -14,9 +14,8 @@ mod step;
 use std::path::PathBuf;
 
 use perifrac_physics::{
-    ChenModel, Discretization, Explicit, ExplicitConfig, PhysicsError, TimeStep,
+    ChenModel, Discretization, Explicit, ExplicitConfig, ForceModel, PhysicsError, TimeStep,
 };
-use perifrac_topology::TetMesh;
 
 use crate::driver::Driver;
 use crate::error::SceneError;
@@ -39,7 +38,7 @@ pub mod defaults {
     /// Plastic cap ratio when a yield limit is given without one.
     pub const PLASTIC_CAP: f64 = 0.2;
     /// Contact penalty factor on `E r_p`.
-    pub const STIFFNESS_FACTOR: f64 = 1.0;
+    pub const STIFFNESS_FACTOR: f64 = perifrac_contact::ContactParams::DEFAULT_STIFFNESS_FACTOR;
     /// Contact normal damping ratio.
     pub const DAMPING_RATIO: f64 = 0.1;
     /// Coulomb friction.
@@ -120,7 +119,7 @@ impl Setup {
         let ctx = Ctx { file: &scene.path };
         let f = &scene.file;
         check::check_settings(&ctx, f)?;
-        let physics = |source: PhysicsError| ctx.physics(source);
+        let physics = |cause: PhysicsError| ctx.physics(cause);
 
         let mut mesh = mesh::build_mesh(&ctx, scene)?;
         let rest = mesh.rest_barycentres();
@@ -130,12 +129,6 @@ impl Setup {
         let horizon = sim.horizon_factor.unwrap_or(defaults::HORIZON_FACTOR) * edge;
 
         let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
-        let masses: Vec<f64> = volumes
-            .iter()
-            .zip(&ids)
-            .map(|(v, &id)| v * materials[id as usize].density)
-            .collect();
-
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
         let (mut disc, report) =
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
@@ -153,9 +146,9 @@ impl Setup {
         let contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
 
         let velocities = loads::initial_velocities(&ctx, f, &rest)?;
-        let dt_limit = step::stable_limit(&mut model, &rest, horizon, &masses, contact);
+        let dt_limit = step::stable_limit(&mut model, &rest, horizon, contact);
         let travel_limit = colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
-            step::travel_limit(c, &radii, &velocities)
+            step::travel_limit(c, mean_radius, &velocities)
         });
         let dt_wanted = step::requested_step(&ctx, sim, dt_limit, travel_limit)?;
         let frames = frames
@@ -180,19 +173,12 @@ impl Setup {
             dt_limit,
             travel_limit,
             dt,
-            mass: masses.iter().sum(),
+            mass: solver.model().masses().iter().sum(),
             up: math::up_from_gravity(gravity),
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
         };
-        let driver = Driver::new(
-            mesh,
-            solver,
-            colliders.map(|(c, _)| c),
-            radii,
-            masses,
-            releases,
-        );
+        let driver = Driver::new(mesh, solver, colliders.map(|(c, _)| c), radii, releases);
         Ok(Setup {
             scene_path: scene.path.clone(),
             scene_text: scene.text.clone(),
@@ -209,13 +195,5 @@ fn output_options(f: &SceneFile) -> OutputOptions {
     OutputOptions {
         povray: f.output.povray.unwrap_or(true),
         particles: f.output.particles.unwrap_or(true),
-    }
-}
-
-/// The mesh after setup, for tests that look at the initial cracks.
-impl Setup {
-    /// The embedded tet mesh at the start.
-    pub fn mesh(&self) -> &TetMesh {
-        self.driver.mesh()
     }
 }

@@ -2,6 +2,7 @@
 
 use std::f64::consts::PI;
 
+use perifrac_physics::math::{cross, norm, sub};
 use perifrac_topology::faces::FACE_CORNERS;
 use perifrac_topology::{TetMesh, NO_TET};
 
@@ -35,18 +36,6 @@ pub(super) fn contact_radii(mesh: &TetMesh, volumes: &[f64], factor: f64) -> Vec
             factor * r
         })
         .collect()
-}
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    super::math::cross(a, b)
-}
-
-fn norm(v: [f64; 3]) -> f64 {
-    super::math::norm(v)
 }
 
 #[cfg(test)]

@@ -2,7 +2,8 @@
 //! to whole steps per frame.
 
 use perifrac_contact::Colliders;
-use perifrac_physics::{max_frequency, ChenModel, ForceModel};
+use perifrac_physics::math::norm;
+use perifrac_physics::{stable_frequency, ChenModel, ForceModel};
 
 use crate::error::SceneError;
 use crate::schema::{DtSpec, SimulationSpec};
@@ -14,36 +15,28 @@ use super::defaults;
 /// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
 /// (power iteration on the linearised forces at `rest`, Silling-Askari when it fails), all
 /// contact springs on the lightest particle, and the fastest dynamic ball on the particles it
-/// touches (see [`ContactStiffness`]).
+/// touches (see [`ContactStiffness`]), with the lightest particle's mass from `model`.
 pub(super) fn stable_limit(
     model: &mut ChenModel,
     rest: &[[f64; 3]],
     horizon: f64,
-    masses: &[f64],
     contact: ContactStiffness,
 ) -> f64 {
-    let est = max_frequency(model, rest, horizon, 100, 1e-5);
-    let omega = if est.omega_max.is_finite() && est.omega_max > 0.0 {
-        est.omega_max
-    } else {
-        2.0 / model.silling_askari_step()
-    };
-    let m_min = masses.iter().cloned().fold(f64::INFINITY, f64::min);
+    let m_min = model.masses().iter().cloned().fold(f64::INFINITY, f64::min);
+    let (omega, _) = stable_frequency(model, rest, horizon);
     2.0 / (omega * omega + contact.per_particle / m_min + contact.ball_omega2).sqrt()
 }
 
 /// The longest step (s) in which the fastest ball (by its initial velocity) or particle (by
 /// `velocities`, m/s) moves [`defaults::TRAVEL_FRACTION`] of the mean contact radius
-/// (`radii`, m; the mean, because a few slivers at the surface must not set the pace for
+/// (`r_mean`, m; the mean, because a few slivers at the surface must not set the pace for
 /// all); infinite when nothing moves.
-pub(super) fn travel_limit(colliders: &Colliders, radii: &[f64], velocities: &[[f64; 3]]) -> f64 {
-    let speed = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+pub(super) fn travel_limit(colliders: &Colliders, r_mean: f64, velocities: &[[f64; 3]]) -> f64 {
     let v_max = colliders
         .balls()
-        .map(|b| speed(b.velocity))
-        .chain(velocities.iter().map(|&v| speed(v)))
+        .map(|b| norm(b.velocity))
+        .chain(velocities.iter().map(|&v| norm(v)))
         .fold(0.0, f64::max);
-    let r_mean = radii.iter().sum::<f64>() / radii.len().max(1) as f64;
     if v_max > 0.0 {
         defaults::TRAVEL_FRACTION * r_mean / v_max
     } else {
