@@ -2,6 +2,7 @@
 
 use crate::desc::{BallDesc, BallMotion, GroundDesc};
 use crate::error::ContactError;
+use crate::implicit::ImplicitState;
 use crate::kernel::Coeffs;
 use crate::math::{dot, from_parry, norm, scale, sub, to_parry};
 use crate::params::ContactParams;
@@ -96,6 +97,8 @@ pub struct Colliders {
     /// [`Colliders::ball_ground_stiffness`].
     pub(crate) reference_mass: Option<f64>,
     pub(crate) scratch: Scratch,
+    /// The lagged state and buffers of the implicit step (`implicit.rs`).
+    pub(crate) implicit: ImplicitState,
 }
 
 fn check_vec(collider: &str, what: &'static str, v: Vec3) -> Result<(), ContactError> {
@@ -219,6 +222,7 @@ impl Colliders {
             gravity,
             reference_mass: None,
             scratch,
+            implicit: ImplicitState::default(),
         })
     }
 

@@ -71,4 +71,26 @@ pub enum ContactError {
     /// A closed surface given to [`crate::Colliders::balls_inside_surface`] is unusable.
     #[error("surface: {0}")]
     BadSurface(String),
+    /// A particle value given to [`crate::Colliders::begin_implicit`] is unusable.
+    #[error("particle {particle}: {what} must be {expected}, got {value}")]
+    BadParticle {
+        /// Particle index (the lowest with a bad value).
+        particle: usize,
+        /// Which value: `"position"`, `"velocity"`, `"mass"` or `"contact radius"`.
+        what: &'static str,
+        /// What it must be, e.g. `"finite and > 0"`.
+        expected: &'static str,
+        /// The offending value (the first non-finite component for vectors).
+        value: f64,
+    },
+    /// A setting of the implicit step is unusable.
+    #[error("{what} must be {expected}, got {value}")]
+    BadSetting {
+        /// Which setting.
+        what: &'static str,
+        /// What it must be.
+        expected: &'static str,
+        /// The offending value.
+        value: f64,
+    },
 }

@@ -7,11 +7,17 @@
 //!
 //! [`Colliders::step`] adds penalty, damping and Coulomb friction forces into the caller's force
 //! array inside the caller's velocity-Verlet step; see its documentation for the call order.
-//! This crate does not know the physics crate.
+//!
+//! For an implicit integrator, [`Colliders::begin_implicit`], [`Colliders::implicit_potential`]
+//! and [`Colliders::end_implicit`] give contact as an incremental potential over the particles'
+//! end positions and the dynamic balls' end centres (damping and friction as lagged
+//! dissipative potentials). This crate does not know the physics crate.
 
 mod colliders;
 mod desc;
 mod error;
+mod implicit;
+mod incremental;
 mod kernel;
 mod math;
 mod params;

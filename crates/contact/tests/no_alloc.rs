@@ -1,4 +1,5 @@
-//! `step` allocates nothing once its buffers fit the particle count.
+//! `step` and the implicit-step methods allocate nothing once their buffers fit the particles
+//! and pairs. One test: the counting allocator sees every thread of the binary.
 
 use perifrac_contact::{BallDesc, BallMotion, Colliders, ContactParams, GroundDesc, Vec3};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -22,6 +23,11 @@ static A: Counting = Counting;
 
 #[test]
 fn steps_after_the_first_do_not_allocate() {
+    explicit_steps();
+    implicit_steps();
+}
+
+fn explicit_steps() {
     let p = ContactParams::from_material(1e7, 0.01, 1.0, 0.3, 0.4);
     let grounds = vec![GroundDesc {
         point: [0.0; 3],
@@ -58,6 +64,82 @@ fn steps_after_the_first_do_not_allocate() {
         let mut contacts = 0;
         for _ in 0..10 {
             contacts += col.step(1e-5, &y, &v, &m, &r, &mut f).contacts;
+        }
+        assert!(contacts > 0);
+        ALLOCS.load(Ordering::Relaxed) - before
+    });
+    assert_eq!(allocs, 0);
+}
+
+fn implicit_steps() {
+    let p = ContactParams::from_material(1e7, 0.01, 1.0, 0.3, 0.4);
+    let grounds = vec![GroundDesc {
+        point: [0.0; 3],
+        normal: [0.0, 0.0, 1.0],
+        params: p,
+    }];
+    let balls = vec![
+        BallDesc {
+            center: [0.0, 0.0, 0.1],
+            radius: 0.1,
+            motion: BallMotion::Dynamic {
+                mass: 1.0,
+                velocity: [0.0; 3],
+            },
+            params: p,
+        },
+        BallDesc {
+            center: [0.05, 0.0, 0.1],
+            radius: 0.05,
+            motion: BallMotion::Kinematic {
+                velocity: [0.1, 0.0, 0.0],
+            },
+            params: p,
+        },
+    ];
+    let mut col = Colliders::new(grounds, balls, [0.0, 0.0, -9.81]).unwrap();
+    // 10k particles (5 chunks) in a row through the ground and both balls.
+    let n = 10_000;
+    let y: Vec<Vec3> = (0..n)
+        .map(|i| [1e-5 * i as f64, 0.0, 0.005 + 1e-6 * i as f64])
+        .collect();
+    let v = vec![[0.1, 0.0, -0.1]; n];
+    let m = vec![1e-3; n];
+    let r = vec![0.01; n];
+    let dt = 1e-3;
+    let q: Vec<Vec3> = y.iter().map(|p| [p[0] + 1e-4, p[1], p[2] - 1e-4]).collect();
+    let mut gq = vec![[0.0; 3]; n];
+    let mut gc = vec![[0.0; 3]; 1];
+    let mut hint = vec![0.0; n];
+    // A one-thread pool, entered once (see explicit_steps).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut step = |col: &mut Colliders| {
+        col.begin_implicit(dt, &y, &v, &m, &r).unwrap();
+        let c = [col.implicit_body_targets()[0]];
+        let mut e = 0.0;
+        for _ in 0..3 {
+            e += col.implicit_potential(&q, &c, Some((&mut gq, &mut gc)));
+            e += col.implicit_potential(&q, &c, None);
+        }
+        col.implicit_stiffness_hint(&q, &c, &mut hint);
+        let stats = col.end_implicit(&q, &c, &v);
+        (e, stats.contacts)
+    };
+    let allocs = pool.install(|| {
+        // Warm-up: the first step sizes the buffers; the lagged-pair lists of a chunk grow
+        // (by doubling) while its number of pairs in contact grows, here once more in the
+        // second step as the balls move.
+        step(&mut col);
+        step(&mut col);
+        let before = ALLOCS.load(Ordering::Relaxed);
+        let mut contacts = 0;
+        for _ in 0..5 {
+            let (e, k) = step(&mut col);
+            assert!(e > 0.0);
+            contacts += k;
         }
         assert!(contacts > 0);
         ALLOCS.load(Ordering::Relaxed) - before
