@@ -28,6 +28,38 @@ pub(crate) const RULE_4: [QuadPoint; 4] = [
     ([B4, B4, B4, A4], 0.25),
 ];
 
+const A14: f64 = 0.310_885_919_263_300_6;
+const B14: f64 = 0.092_735_250_310_891_3;
+const C14: f64 = 0.045_503_704_125_649_9;
+const WA14: f64 = 0.112_687_925_718_015_6;
+const WB14: f64 = 0.073_493_043_116_361_9;
+const WC14: f64 = 0.042_546_020_777_081_5;
+const D14: f64 = 1.0 - 3.0 * A14;
+const E14: f64 = 1.0 - 3.0 * B14;
+const F14: f64 = 0.5 - C14;
+
+/// 14-point rule, exact for degree 5: two 4-point orbits `(a, a, a, 1 - 3a)` and one 6-point
+/// orbit `(c, c, 1/2 - c, 1/2 - c)`, every point inside the tet and every weight positive (the
+/// 11-point degree-4 rule has a negative weight, which can make a quadrature of a convex
+/// energy non-convex). Used for the quadratic tet's non-polynomial hyperelastic energy; the
+/// constants are checked against the exact moments in the tests below.
+pub(crate) const RULE_14: [QuadPoint; 14] = [
+    ([D14, A14, A14, A14], WA14),
+    ([A14, D14, A14, A14], WA14),
+    ([A14, A14, D14, A14], WA14),
+    ([A14, A14, A14, D14], WA14),
+    ([E14, B14, B14, B14], WB14),
+    ([B14, E14, B14, B14], WB14),
+    ([B14, B14, E14, B14], WB14),
+    ([B14, B14, B14, E14], WB14),
+    ([C14, C14, F14, F14], WC14),
+    ([C14, F14, C14, F14], WC14),
+    ([C14, F14, F14, C14], WC14),
+    ([F14, C14, C14, F14], WC14),
+    ([F14, C14, F14, C14], WC14),
+    ([F14, F14, C14, C14], WC14),
+];
+
 /// Shape functions of one element type with `N` nodes.
 pub(crate) trait Basis<const N: usize>: Send + Sync + 'static {
     /// The quadrature rule that integrates this element's stiffness exactly.
@@ -105,18 +137,19 @@ mod tests {
 
     #[test]
     fn rules_integrate_their_degree_exactly() {
-        for (rule, degree) in [(&RULE_1[..], 1), (&RULE_4[..], 2)] {
+        for (rule, degree) in [(&RULE_1[..], 1), (&RULE_4[..], 2), (&RULE_14[..], 5)] {
             for a in 0..=degree {
                 for b in 0..=degree - a {
                     for c in 0..=degree - a - b {
-                        let k = [a, b, c, 0];
+                        let k = [a, b, c, degree - a - b - c];
                         let q: f64 = rule
                             .iter()
                             .map(|(l, w)| {
                                 w * (0..4).map(|i| l[i].powi(k[i] as i32)).product::<f64>()
                             })
                             .sum();
-                        assert!((q - exact(k)).abs() < 1e-15, "{k:?}: {q} vs {}", exact(k));
+                        // The constants have 16 digits: a few rounding errors of the moments.
+                        assert!((q - exact(k)).abs() < 2e-15, "{k:?}: {q} vs {}", exact(k));
                     }
                 }
             }

@@ -43,7 +43,7 @@ impl Lame {
 
 /// Displacement gradient `H[i][j] = sum_a u_a[i] dN_a/dX_j`.
 #[inline]
-fn gradient<const N: usize>(u: &[Vec3; N], grads: &[Vec3; N]) -> Mat3 {
+pub(crate) fn gradient<const N: usize>(u: &[Vec3; N], grads: &[Vec3; N]) -> Mat3 {
     let mut h = [[0.0; 3]; 3];
     for a in 0..N {
         for i in 0..3 {

@@ -84,13 +84,59 @@ pub enum FemError {
     #[error("sparse solver failed: {0}")]
     Solver(String),
     /// An element inverted (det F <= 0 at a quadrature point) under corotated kinematics, which
-    /// has no rotation for it.
+    /// has no rotation for it, or under neo-Hookean elasticity, whose energy is infinite there
+    /// (the static solver reports `time` = load parameter times its final time).
     #[error("element {element} inverted (det F <= 0) at time {time:?} s")]
     ElementInverted {
         /// Index of the element (tet); the lowest one when several inverted.
         element: usize,
         /// Simulated time (s) of the step that inverted it, when a time integrator reports it.
         time: Option<f64>,
+    },
+    /// An element id past the end of the mesh's elements.
+    #[error("element {element} does not exist: the mesh has {count} elements")]
+    ElementOutOfRange {
+        /// The id given.
+        element: usize,
+        /// Number of elements.
+        count: usize,
+    },
+    /// A solver setting out of its range.
+    #[error("solver option {name} = {value} is out of range ({range})")]
+    BadOption {
+        /// Field name.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+        /// The accepted range, in words.
+        range: &'static str,
+    },
+    /// Newton's method did not reach the tolerance within its iteration cap in a load step,
+    /// even after the allowed step cuts.
+    #[error("Newton did not converge at load step {step} (load {load}): residual {residual:e} N after {iterations} iterations, tolerance {tolerance:e} N")]
+    NotConverged {
+        /// Index of the load step (from 0) the failure happened in.
+        step: usize,
+        /// Load parameter in (0, 1] it was aiming at.
+        load: f64,
+        /// Iterations made.
+        iterations: usize,
+        /// Residual norm (N) at the end.
+        residual: f64,
+        /// Residual norm (N) it had to reach.
+        tolerance: f64,
+    },
+    /// No step along the Newton direction lowered the total potential energy.
+    #[error("line search failed at load step {step} (load {load}), iteration {iteration}: residual {residual:e} N")]
+    LineSearchFailed {
+        /// Index of the load step (from 0).
+        step: usize,
+        /// Load parameter in (0, 1] it was aiming at.
+        load: f64,
+        /// Newton iteration within the step.
+        iteration: usize,
+        /// Residual norm (N) where it stopped.
+        residual: f64,
     },
     /// A sample point lies outside the mesh by more than the snapping tolerance.
     #[error("sample point {index} at {point:?} lies outside the mesh ({distance:e} m from the nearest element, tolerance {tolerance:e} m)")]
