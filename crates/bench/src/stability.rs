@@ -10,7 +10,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use perifrac_physics::{
-    max_frequency, ChenMaterial, ChenModel, Explicit, FractureParams, Loads, TimeStep, Vec3,
+    max_frequency, ChenMaterial, ChenModel, Explicit, FractureParams, Loads, Solver, TimeStep, Vec3,
 };
 use perifrac_scene::{Scene, Setup};
 use perifrac_topology::primitives::box_data;
@@ -71,7 +71,7 @@ fn all_finite(v: &[Vec3]) -> bool {
 }
 
 /// Kinetic plus elastic energy of `s` (J).
-fn energy(s: &mut Explicit<ChenModel>) -> f64 {
+fn energy(s: &mut dyn Solver) -> f64 {
     s.kinetic_energy() + s.elastic_energy()
 }
 

@@ -50,11 +50,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let info = &setup.info;
     let frames = setup.frames;
     eprintln!(
-        "{}: {} particles, {} bonds, horizon {:.3e} m, dt {:.3e} s (stable limit {:.3e} s{}), \
-         {} frames of {} steps, setup {:.2} s",
+        "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
+         (explicit stable limit {:.3e} s{}), {} frames of {} steps, setup {:.2} s",
         args.scene.display(),
         info.particles,
         info.bonds,
+        info.model,
+        info.integrator,
         info.horizon,
         info.dt,
         info.dt_limit,
@@ -103,6 +105,21 @@ pub fn run(args: &RunArgs) -> Result<()> {
             String::new()
         }
     );
+    if summary.integrator == "implicit" {
+        let it = summary.solver;
+        eprintln!(
+            "implicit: {} iterations ({:.1} per step, {} evaluations), {} steps at the \
+             iteration cap, {} factorisations ({:.2} s), solves {:.2} s, factor {:.1} MB",
+            it.iterations,
+            it.iterations as f64 / summary.steps.max(1) as f64,
+            it.evaluations,
+            it.capped_steps,
+            it.factorizations,
+            it.factor_seconds,
+            it.solve_seconds,
+            it.factor_bytes as f64 / 1e6
+        );
+    }
     eprintln!(
         "time per stage: physics {:.0}%, topology {:.0}%, advection {:.0}%, output {:.0}%",
         share(t.physics),

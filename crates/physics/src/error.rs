@@ -91,4 +91,33 @@ pub enum PhysicsError {
         /// The guard's limit in m.
         limit: f64,
     },
+    /// The implicit step's matrix could not be factored.
+    #[error("factorisation failed: {0}")]
+    Factorization(String),
+    /// The implicit step found no decrease of its objective along its search direction before
+    /// converging.
+    #[error("implicit step {step}: no decrease of the objective after {halvings} halvings of the step at iteration {iteration} (predicted decrease {predicted:e} J of {phi:e} J); try a smaller time step")]
+    Stalled {
+        /// Step counter.
+        step: u64,
+        /// Iteration within the step.
+        iteration: usize,
+        /// Line-search halvings tried.
+        halvings: usize,
+        /// Decrease the direction predicted (J).
+        predicted: f64,
+        /// The objective's value (J).
+        phi: f64,
+    },
+    /// The implicit step's objective or its gradient is not finite where the step starts.
+    #[error("implicit step {step}: the objective ({phi:e} J) or its gradient is not finite at the predicted positions")]
+    NotFinite {
+        /// Step counter.
+        step: u64,
+        /// The objective's value (J).
+        phi: f64,
+    },
+    /// A setting refers to something the model cannot do.
+    #[error("{0}")]
+    Unsupported(String),
 }

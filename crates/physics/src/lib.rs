@@ -30,6 +30,7 @@
 
 pub mod anisotropy;
 pub mod energy;
+pub mod environment;
 pub mod error;
 pub mod family;
 pub mod fracture;
@@ -41,13 +42,23 @@ mod par;
 pub mod particles;
 pub mod plastic;
 pub mod stable_step;
+pub mod state;
 
+pub use environment::{Environment, External, ImplicitEnvironment, NoEnvironment};
 pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
-pub use integrate::{Explicit, ExplicitConfig, External, TimeStep};
-pub use loads::Loads;
-pub use material::{ChenMaterial, ChenModel, ChenOptions, ForceModel, FractureParams, YieldParams};
+pub use integrate::{
+    Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator, QuasiNewton, Simulation,
+    Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,
+};
+pub use loads::{AnchorMotion, Loads};
+pub use material::{
+    Basis, ChenMaterial, ChenModel, ChenOptions, Curve, ForceModel, FractureParams,
+    QuasiNewtonModel, XuAnisotropy, XuKernelShape, XuMaterial, XuModel, XuModuli, XuOptions,
+    YieldParams,
+};
 pub use math::{Real, Vec3};
 pub use particles::Discretization;
 pub use stable_step::{max_frequency, stable_frequency, FrequencyEstimate};
+pub use state::State;

@@ -21,6 +21,22 @@ where
         });
 }
 
+/// Calls `f(i)` for every particle and stores the pair it returns in `a[i]`, `b[i]`, in
+/// parallel.
+pub(crate) fn map_particles2<A: Send, B: Send, F>(a: &mut [A], b: &mut [B], f: F)
+where
+    F: Fn(usize) -> (A, B) + Sync,
+{
+    a.par_chunks_mut(GRAIN)
+        .zip(b.par_chunks_mut(GRAIN))
+        .enumerate()
+        .for_each(|(c, (ca, cb))| {
+            for (o, (sa, sb)) in ca.iter_mut().zip(cb.iter_mut()).enumerate() {
+                (*sa, *sb) = f(c * GRAIN + o);
+            }
+        });
+}
+
 /// Calls `f(first, per_particle, per_bond)` on disjoint blocks of consecutive particles starting at
 /// `first`, where `per_bond` holds exactly the bonds of those particles (CSR `offsets`).
 pub(crate) fn for_rows_mut<P: Send, B: Send, F>(

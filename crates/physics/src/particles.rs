@@ -84,6 +84,18 @@ impl Discretization {
         Ok(())
     }
 
+    /// Checks every particle's material id against `count` materials.
+    pub fn check_material_ids(&self, count: usize) -> Result<(), PhysicsError> {
+        match self.materials.iter().position(|&id| id as usize >= count) {
+            Some(i) => Err(PhysicsError::UnknownMaterial {
+                particle: i,
+                material: self.materials[i],
+                count,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.volumes.len()

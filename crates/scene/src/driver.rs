@@ -5,7 +5,10 @@
 use std::time::{Duration, Instant};
 
 use perifrac_contact::{Colliders, ContactStats};
-use perifrac_physics::{ChenModel, Explicit, ForceModel, PhysicsError};
+use perifrac_physics::math::Vec3;
+use perifrac_physics::{
+    Environment, External, ImplicitEnvironment, NoEnvironment, PhysicsError, Solver,
+};
 use perifrac_topology::TetMesh;
 
 /// Wall time spent in each stage since the driver was made.
@@ -45,11 +48,12 @@ pub struct StepReport {
     pub contact: ContactStats,
 }
 
-/// The simulation state of a running scene: the embedded mesh, the peridynamic solver, the
-/// colliders, and per-particle contact radii. Made by [`crate::Setup::new`].
+/// The simulation state of a running scene: the embedded mesh, the peridynamic solver (any
+/// force model under any integrator), the colliders, and per-particle contact radii. Made by
+/// [`crate::Setup::new`].
 pub struct Driver {
     mesh: TetMesh,
-    solver: Explicit<ChenModel>,
+    solver: Box<dyn Solver>,
     colliders: Option<Colliders>,
     radii: Vec<f64>,
     /// Anchors to release, sorted by time.
@@ -65,7 +69,7 @@ impl Driver {
     /// `releases` lists anchor releases as (time in s, particles).
     pub(crate) fn new(
         mesh: TetMesh,
-        solver: Explicit<ChenModel>,
+        solver: Box<dyn Solver>,
         colliders: Option<Colliders>,
         radii: Vec<f64>,
         mut releases: Releases,
@@ -97,7 +101,7 @@ impl Driver {
             ..
         } = self;
         let t0 = Instant::now();
-        let (broken, contact) = physics_with_contact(solver, colliders.as_mut(), radii)?;
+        let (broken, contact) = physics_with_contact(solver.as_mut(), colliders.as_mut(), radii)?;
         let t1 = Instant::now();
         let broken_bonds = broken.len();
         let crack_faces = cut(mesh, broken);
@@ -136,13 +140,13 @@ impl Driver {
     }
 
     /// The peridynamic solver (positions, velocities, time, step).
-    pub fn solver(&self) -> &Explicit<ChenModel> {
-        &self.solver
+    pub fn solver(&self) -> &dyn Solver {
+        self.solver.as_ref()
     }
 
     /// The solver, mutably (elastic energy needs it).
-    pub fn solver_mut(&mut self) -> &mut Explicit<ChenModel> {
-        &mut self.solver
+    pub fn solver_mut(&mut self) -> &mut dyn Solver {
+        self.solver.as_mut()
     }
 
     /// The colliders, when the scene has any.
@@ -189,28 +193,96 @@ impl Driver {
     }
 }
 
-/// Stage 1: one explicit step of the particles, with the colliders' forces added after the
-/// internal ones. Returns the bonds broken in it.
+/// Stage 1: one step of the particles in the colliders' field (forces for an explicit step,
+/// a potential for an implicit one). Returns the bonds broken in it.
 fn physics_with_contact<'a>(
-    solver: &'a mut Explicit<ChenModel>,
+    solver: &'a mut dyn Solver,
     colliders: Option<&mut Colliders>,
     radii: &[f64],
 ) -> Result<(Broken<'a>, ContactStats), PhysicsError> {
-    let mut stats = ContactStats::default();
-    let broken = match colliders {
-        None => solver.step()?,
-        Some(c) => solver.step_with(|ext| {
-            stats = c.step(
-                ext.dt,
-                ext.positions,
-                ext.velocities,
-                ext.masses,
+    match colliders {
+        None => Ok((solver.step(&mut NoEnvironment)?, ContactStats::default())),
+        Some(colliders) => {
+            let mut env = ContactEnvironment {
+                colliders,
                 radii,
-                ext.forces,
-            );
-        })?,
-    };
-    Ok((broken, stats))
+                stats: ContactStats::default(),
+            };
+            let broken = solver.step(&mut env)?;
+            Ok((broken, env.stats))
+        }
+    }
+}
+
+/// The colliders as the physics crate's [`Environment`]: contact forces on the particles and
+/// the balls' own motion, with the statistics of the step.
+struct ContactEnvironment<'a> {
+    colliders: &'a mut Colliders,
+    radii: &'a [f64],
+    stats: ContactStats,
+}
+
+impl Environment for ContactEnvironment<'_> {
+    fn add_forces(&mut self, ext: External<'_>) {
+        self.stats = self.colliders.step(
+            ext.dt,
+            ext.positions,
+            ext.velocities,
+            ext.masses,
+            self.radii,
+            ext.forces,
+        );
+    }
+
+    fn implicit(&mut self) -> Option<&mut dyn ImplicitEnvironment> {
+        Some(self)
+    }
+}
+
+/// The colliders as an incremental potential: penalty, damping and lagged friction, with the
+/// dynamic balls as the step's extra bodies (see `perifrac_contact::Colliders::begin_implicit`).
+impl ImplicitEnvironment for ContactEnvironment<'_> {
+    fn begin(
+        &mut self,
+        dt: f64,
+        y0: &[Vec3],
+        v0: &[Vec3],
+        masses: &[f64],
+    ) -> Result<(), PhysicsError> {
+        self.colliders
+            .begin_implicit(dt, y0, v0, masses, self.radii)
+            .map_err(|e| PhysicsError::BadSetting(format!("contact: {e}")))
+    }
+
+    fn bodies(&self) -> usize {
+        self.colliders.implicit_bodies()
+    }
+
+    fn body_guess(&self, out: &mut [Vec3]) {
+        out.copy_from_slice(self.colliders.implicit_body_targets());
+    }
+
+    fn body_curvature(&self, out: &mut [f64]) {
+        out.copy_from_slice(self.colliders.implicit_body_diagonal());
+    }
+
+    fn potential(
+        &mut self,
+        q: &[Vec3],
+        c: &[Vec3],
+        grad: Option<(&mut [Vec3], &mut [Vec3])>,
+    ) -> f64 {
+        self.colliders.implicit_potential(q, c, grad)
+    }
+
+    fn end(&mut self, q: &[Vec3], c: &[Vec3], v: &[Vec3]) {
+        self.stats = self.colliders.end_implicit(q, c, v);
+    }
+
+    fn particle_curvature(&mut self, y0: &[Vec3], out: &mut [f64]) {
+        let c = self.colliders.implicit_body_start();
+        self.colliders.implicit_stiffness_hint(y0, c, out);
+    }
 }
 
 /// Stage 2: crack faces between face-adjacent tets whose bond broke, then vertex splitting.

@@ -30,6 +30,9 @@ pub mod setup;
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use load::Scene;
-pub use output::{check_output_dir, FrameWriter, RunManifest, POVRAY_MESH_NAME, RUN_FORMAT};
+pub use output::{
+    check_output_dir, FrameWriter, IterationsJson, RunManifest, SolverJson, POVRAY_MESH_NAME,
+    RUN_FORMAT,
+};
 pub use run::{run, Observer, Progress, Silent, Summary};
 pub use setup::{OutputOptions, Setup, SetupInfo};

@@ -59,6 +59,33 @@ pub struct RunManifest {
     pub finished: bool,
     /// Why the run stopped early, if it did.
     pub error: Option<String>,
+    /// The model and integrator, when not the default Chen model stepped explicitly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solver: Option<SolverJson>,
+}
+
+/// Which solver ran, in `run.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct SolverJson {
+    /// `"chen"` or `"xu"`.
+    pub model: String,
+    /// `"explicit"` or `"implicit"`.
+    pub integrator: String,
+}
+
+/// An implicit run's iteration counts up to a frame, in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct IterationsJson {
+    /// Quasi-Newton iterations over all steps so far.
+    pub iterations: u64,
+    /// Steps that reached the iteration cap.
+    pub capped_steps: u64,
+    /// Evaluations of the objective, line-search trials included.
+    pub evaluations: u64,
+    /// Factorisations of the step matrix, the first included.
+    pub factorizations: u64,
+    /// Heap bytes of the factor.
+    pub factor_bytes: usize,
 }
 
 /// A box (m).
@@ -119,6 +146,9 @@ pub struct FrameJson {
     pub kinetic_energy: f64,
     /// Elastic energy (J).
     pub elastic_energy: f64,
+    /// Implicit runs: iterations so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub implicit: Option<IterationsJson>,
 }
 
 /// Refuses a non-empty `dir` unless `force`; reads only, so it can run before the setup.
@@ -195,6 +225,10 @@ impl FrameWriter {
             frames: Vec::new(),
             finished: false,
             error: None,
+            solver: (info.model != "chen" || info.integrator != "explicit").then(|| SolverJson {
+                model: info.model.into(),
+                integrator: info.integrator.into(),
+            }),
         };
         Ok(FrameWriter {
             dir: dir.to_path_buf(),
@@ -277,6 +311,16 @@ impl FrameWriter {
             crack_triangles: surface.crack.iter().filter(|&&c| c != 0).count(),
             kinetic_energy: driver.solver().kinetic_energy(),
             elastic_energy: driver.solver_mut().elastic_energy(),
+            implicit: (driver.solver().integrator_name() == "implicit").then(|| {
+                let s = driver.solver().stats();
+                IterationsJson {
+                    iterations: s.iterations,
+                    capped_steps: s.capped_steps,
+                    evaluations: s.evaluations,
+                    factorizations: s.factorizations,
+                    factor_bytes: s.factor_bytes,
+                }
+            }),
         };
         self.manifest.frames.push(frame);
         self.manifest.finished = last;

@@ -64,6 +64,11 @@ pub struct Summary {
     pub frames_written: usize,
     /// Wall time per stage (s).
     pub stage_times: StageTimes,
+    /// The integrator's counters (iterations, factorisations and their wall times for the
+    /// implicit one; zeros for the explicit one).
+    pub solver: perifrac_physics::SolverStats,
+    /// The integrator's name.
+    pub integrator: &'static str,
 }
 
 /// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
@@ -130,5 +135,7 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
         ball_kinetic_energy: driver.colliders().map_or(0.0, |c| c.kinetic_energy()),
         frames_written: writer.frames_written(),
         stage_times: driver.stage_times(),
+        solver: driver.solver().stats(),
+        integrator: driver.solver().integrator_name(),
     })
 }

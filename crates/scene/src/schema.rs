@@ -4,6 +4,7 @@
 //! Units are SI: metres, seconds, kilograms, pascals.
 
 use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// A whole scene file.
@@ -79,12 +80,25 @@ impl Region {
     }
 }
 
-/// One material (Chen elastoplastic with fracture, MODEL.md section 2).
+/// One material: Chen's elastoplastic model with fracture (MODEL.md section 2, the default) or
+/// Xu's hyperelastic one (section 5). Every material of a scene uses the same model.
 #[derive(Debug, Clone, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     /// A name for messages.
     pub name: Option<String>,
+    /// `"chen"` (default) or `"xu"`.
+    pub model: Option<String>,
+    /// Xu: the named energy for both curves, `"linear"`, `"neo_hookean"` (default) or
+    /// `"stvk"`.
+    pub energy: Option<String>,
+    /// Xu: a custom dilatation curve `g`, basis names to coefficients (`{ A1 = 1.0 }`).
+    pub g: Option<BTreeMap<String, f64>>,
+    /// Xu: a custom bond curve `h`, basis names to coefficients (`{ B3 = 1.5, B1 = -0.5 }`).
+    pub h: Option<BTreeMap<String, f64>>,
+    /// Xu: how `young` and `poisson` become the model's `lambda` and `mu`: `"consistent"`
+    /// (default) or `"paper"`.
+    pub moduli: Option<String>,
     /// Particles whose rest barycentre lies in this box get this material.
     pub region: Option<Region>,
     /// Young's modulus (Pa), with `poisson`; or give `bulk_modulus` and `shear_modulus`.
@@ -107,8 +121,11 @@ pub struct MaterialSpec {
     pub yield_strain: Option<f64>,
     /// Plastic extension cap as a ratio of the rest bond length (default 0.2 when plastic).
     pub plastic_cap: Option<f64>,
-    /// Anisotropy: the diagonal of `G` in `omega = delta / |G xi|` (default isotropic).
+    /// Anisotropy (default isotropic). Chen: the diagonal of `G` in `omega = delta / |G xi|`
+    /// along `axes`; Xu: `Sigma = diag(s1, s2, s3)`, `s1 s2 s3 = 1`, along `axes`.
     pub anisotropy: Option<[f64; 3]>,
+    /// The material axes of `anisotropy`, three orthonormal vectors (default x, y, z).
+    pub axes: Option<[[f64; 3]; 3]>,
 }
 
 /// `dt = "auto"` or a number of seconds.
@@ -140,6 +157,23 @@ pub struct SimulationSpec {
     /// Contact radius of a particle as a multiple of its volume-equivalent radius, capped on the
     /// boundary at the distance to the surface (default 1; see `setup::radii`).
     pub contact_radius: Option<f64>,
+    /// `"explicit"` (velocity Verlet, default) or `"implicit"` (quasi-Newton; Xu's model).
+    pub integrator: Option<String>,
+    /// Implicit: steps per frame when `dt = "auto"` (default 1).
+    pub steps_per_frame: Option<u64>,
+    /// Implicit: iterations per step at most (default 100).
+    pub iterations: Option<usize>,
+    /// Implicit: relative decrease at which a step stops (default 1e-4).
+    pub tolerance: Option<f64>,
+    /// Implicit: L-BFGS pairs kept (default 10; 0: the constant matrix alone).
+    pub history: Option<usize>,
+    /// Implicit: refactor the step matrix when this share of the bonds broke since the last
+    /// factorisation (default 0.02).
+    pub refactor_share: Option<f64>,
+    /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.
+    pub influence: Option<String>,
+    /// Xu: the inversion guard's factor on the rest bond stiffness (default none).
+    pub inversion_guard: Option<f64>,
 }
 
 /// A ground plane (half-space) through `point` with outward `normal`.
@@ -180,7 +214,9 @@ pub struct BallSpec {
     pub friction: Option<f64>,
 }
 
-/// Particles in a region held at a prescribed velocity (zero: fixed).
+/// Particles in a region held on a prescribed rigid motion: a translation at `velocity` (zero:
+/// fixed) and a rotation at `angular` about an axis through `center`, which moves with
+/// `velocity`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct AnchorSpec {
@@ -188,6 +224,11 @@ pub struct AnchorSpec {
     pub region: Region,
     /// Prescribed velocity (m/s), default zero.
     pub velocity: Option<[f64; 3]>,
+    /// Angular velocity (rad/s, axis times rate), default none.
+    pub angular: Option<[f64; 3]>,
+    /// A point of the rotation axis at time 0 (m), default the centroid of the anchored
+    /// particles' rest positions.
+    pub center: Option<[f64; 3]>,
     /// Time (s) at which the particles are released, default never.
     pub until: Option<f64>,
 }

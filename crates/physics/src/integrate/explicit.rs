@@ -6,12 +6,14 @@
 //! so the kinetic plus elastic energy it reports is conserved to O(dt^2) without drift. Both have
 //! the same stability limit `dt < 2 / omega_max`.
 
-use crate::energy;
+use super::simulation::{check_lengths, Integrator, Simulation};
+use crate::environment::{Environment, External, ForcesOnly};
 use crate::error::PhysicsError;
 use crate::loads::Loads;
 use crate::material::ForceModel;
-use crate::math::{dot, Vec3};
+use crate::math::{dot, norm, sub, Vec3};
 use crate::stable_step::{stable_frequency, FrequencyEstimate};
+use crate::state::State;
 use rayon::prelude::*;
 
 /// How the step is chosen.
@@ -49,37 +51,20 @@ impl Default for ExplicitConfig {
     }
 }
 
-/// What an external-force callback of [`Explicit::step_with`] sees.
-pub struct External<'a> {
-    /// The step (s).
-    pub dt: f64,
-    /// Positions at the end of the step (m).
-    pub positions: &'a [Vec3],
-    /// Half-step velocities (m/s).
-    pub velocities: &'a [Vec3],
-    /// Particle masses (kg).
-    pub masses: &'a [f64],
-    /// Internal forces at `positions` (N); add external forces here.
-    pub forces: &'a mut [Vec3],
-}
-
-/// The explicit solver: owns the model, the particle state and every per-step buffer.
-pub struct Explicit<M: ForceModel> {
-    model: M,
-    y: Vec<Vec3>,
-    v: Vec<Vec3>,
+/// Velocity Verlet: owns the per-step buffers (forces, inverse masses, broken bonds).
+pub struct VelocityVerlet {
     f: Vec<Vec3>,
     inv_mass: Vec<f64>,
-    loads: Loads,
     dt: f64,
     guard: f64,
-    time: f64,
-    steps: u64,
     broken: Vec<(u32, u32)>,
     estimate: Option<FrequencyEstimate>,
 }
 
-impl<M: ForceModel> Explicit<M> {
+/// The explicit solver: a force model stepped by velocity Verlet.
+pub type Explicit<M> = Simulation<M, VelocityVerlet>;
+
+impl<M: ForceModel> Simulation<M, VelocityVerlet> {
     /// Starts at rest at `rest` (m). `horizon` (m) scales the blow-up guard and the probe of the
     /// stable-step estimate.
     pub fn new(
@@ -90,17 +75,7 @@ impl<M: ForceModel> Explicit<M> {
         config: ExplicitConfig,
     ) -> Result<Self, PhysicsError> {
         let n = model.num_particles();
-        if rest.len() != n || loads.len() != n {
-            return Err(PhysicsError::LengthMismatch {
-                what: "rest positions / loads",
-                expected: n,
-                got: if rest.len() != n {
-                    rest.len()
-                } else {
-                    loads.len()
-                },
-            });
-        }
+        check_lengths(n, rest, &loads)?;
         if config.guard_fraction.is_nan() || config.guard_fraction <= 0.0 {
             return Err(PhysicsError::BadSetting(format!(
                 "guard fraction {} must be positive (infinity disables the guard)",
@@ -118,22 +93,21 @@ impl<M: ForceModel> Explicit<M> {
             return Err(PhysicsError::BadTimeStep(dt));
         }
         let inv_mass = model.masses().iter().map(|m| 1.0 / m).collect();
-        let y = rest.to_vec();
+        let state = State::at_rest(rest);
         let mut f = vec![[0.0; 3]; n];
-        model.update_forces(&y, &mut f);
-        Ok(Explicit {
+        model.update_forces(&state.positions, &mut f);
+        Ok(Simulation {
             model,
-            y,
-            v: vec![[0.0; 3]; n],
-            f,
-            inv_mass,
+            state,
             loads,
-            dt,
-            guard: config.guard_fraction * horizon,
-            time: 0.0,
-            steps: 0,
-            broken: Vec::new(),
-            estimate,
+            integrator: VelocityVerlet {
+                f,
+                inv_mass,
+                dt,
+                guard: config.guard_fraction * horizon,
+                broken: Vec::new(),
+                estimate,
+            },
         })
     }
 
@@ -148,42 +122,93 @@ impl<M: ForceModel> Explicit<M> {
     /// [`External::forces`] (contact, say); they act in the closing half kick and the opening
     /// half kick of the next step, as internal forces do. Velocities seen are the half-step
     /// ones. The closure runs once per step, on the calling thread.
-    pub fn step_with<F>(&mut self, mut external: F) -> Result<&[(u32, u32)], PhysicsError>
+    pub fn step_with<F>(&mut self, external: F) -> Result<&[(u32, u32)], PhysicsError>
     where
         F: FnMut(External<'_>),
     {
-        self.kick();
-        self.drift()?;
-        self.broken.clear();
-        self.model.break_bonds(&self.y, &mut self.broken);
-        self.model.update_forces(&self.y, &mut self.f);
-        external(External {
-            dt: self.dt,
-            positions: &self.y,
-            velocities: &self.v,
-            masses: self.model.masses(),
-            forces: &mut self.f,
-        });
-        self.kick();
-        self.time += self.dt;
-        self.steps += 1;
-        Ok(&self.broken)
+        self.step_in(&mut ForcesOnly(external))
     }
 
-    /// Half-step velocity update with forces, gravity, damping and anchors.
-    fn kick(&mut self) {
+    /// The power-iteration estimate, when `dt` was `Auto`.
+    pub fn estimate(&self) -> Option<FrequencyEstimate> {
+        self.integrator.estimate
+    }
+
+    /// Sets positions (m) and recomputes forces (history advances as in a step).
+    pub fn set_positions(&mut self, y: &[Vec3]) {
+        self.state.positions.copy_from_slice(y);
+        self.model
+            .update_forces(&self.state.positions, &mut self.integrator.f);
+    }
+
+    /// Internal forces at the current positions (N).
+    pub fn forces(&self) -> &[Vec3] {
+        &self.integrator.f
+    }
+}
+
+impl<M: ForceModel> Integrator<M> for VelocityVerlet {
+    fn advance(
+        &mut self,
+        model: &mut M,
+        state: &mut State,
+        loads: &Loads,
+        env: &mut dyn Environment,
+    ) -> Result<(), PhysicsError> {
+        let t = state.time;
+        self.kick(state, loads, t);
+        if loads.has_rotation() {
+            self.drift::<true>(state, loads)?;
+        } else {
+            self.drift::<false>(state, loads)?;
+        }
+        self.broken.clear();
+        model.break_bonds(&state.positions, &mut self.broken);
+        model.update_forces(&state.positions, &mut self.f);
+        env.add_forces(External {
+            dt: self.dt,
+            positions: &state.positions,
+            velocities: &state.velocities,
+            masses: model.masses(),
+            forces: &mut self.f,
+        });
+        self.kick(state, loads, t + self.dt);
+        state.time += self.dt;
+        state.steps += 1;
+        Ok(())
+    }
+
+    fn broken(&self) -> &[(u32, u32)] {
+        &self.broken
+    }
+
+    fn dt(&self) -> f64 {
+        self.dt
+    }
+
+    fn name(&self) -> &'static str {
+        "explicit"
+    }
+}
+
+impl VelocityVerlet {
+    /// Half-step velocity update with forces, gravity, damping and anchors (their velocity at
+    /// time `t`).
+    fn kick(&self, state: &mut State, loads: &Loads, t: f64) {
         let half = 0.5 * self.dt;
-        let decay = (-self.loads.damping * half).exp();
-        let (f, inv_mass, loads) = (&self.f, &self.inv_mass, &self.loads);
+        let decay = (-loads.damping * half).exp();
+        let (f, inv_mass) = (&self.f, &self.inv_mass);
         let g = loads.gravity;
-        self.v
+        let y = &state.positions;
+        state
+            .velocities
             .par_chunks_mut(crate::par::GRAIN)
             .enumerate()
             .for_each(|(c, chunk)| {
                 for (o, v) in chunk.iter_mut().enumerate() {
                     let i = c * crate::par::GRAIN + o;
-                    if let Some(prescribed) = loads.anchored(i) {
-                        *v = prescribed;
+                    if let Some(motion) = loads.motion(i) {
+                        *v = motion.velocity_at(y[i], t);
                         continue;
                     }
                     for d in 0..3 {
@@ -193,12 +218,18 @@ impl<M: ForceModel> Explicit<M> {
             });
     }
 
-    /// Position update with the blow-up guard.
-    fn drift(&mut self) -> Result<(), PhysicsError> {
+    /// Position update with the blow-up guard; with `ROTATION`, anchored particles of a turning
+    /// motion move along their exact circle instead of the tangent.
+    fn drift<const ROTATION: bool>(
+        &self,
+        state: &mut State,
+        loads: &Loads,
+    ) -> Result<(), PhysicsError> {
         let dt = self.dt;
-        let v = &self.v;
-        let (worst, at) = self
-            .y
+        let t = state.time;
+        let v = &state.velocities;
+        let (worst, at) = state
+            .positions
             .par_chunks_mut(crate::par::GRAIN)
             .enumerate()
             .map(|(c, chunk)| {
@@ -206,6 +237,17 @@ impl<M: ForceModel> Explicit<M> {
                 for (o, y) in chunk.iter_mut().enumerate() {
                     let i = c * crate::par::GRAIN + o;
                     let vi = v[i];
+                    if ROTATION {
+                        if let Some(m) = loads.motion(i).filter(|m| m.rotates()) {
+                            let next = m.advance(*y, t, dt);
+                            let s = norm(sub(next, *y));
+                            *y = next;
+                            if s > worst.0 || !s.is_finite() {
+                                worst = (if s.is_finite() { s } else { f64::INFINITY }, i);
+                            }
+                            continue;
+                        }
+                    }
                     for d in 0..3 {
                         y[d] += dt * vi[d];
                     }
@@ -229,83 +271,12 @@ impl<M: ForceModel> Explicit<M> {
             );
         if worst.is_infinite() || worst > self.guard {
             return Err(PhysicsError::Unstable {
-                step: self.steps,
+                step: state.steps,
                 particle: at,
                 displacement: worst,
                 limit: self.guard,
             });
         }
         Ok(())
-    }
-
-    /// The time step (s).
-    pub fn dt(&self) -> f64 {
-        self.dt
-    }
-
-    /// The power-iteration estimate, when `dt` was `Auto`.
-    pub fn estimate(&self) -> Option<FrequencyEstimate> {
-        self.estimate
-    }
-
-    /// Simulated time (s).
-    pub fn time(&self) -> f64 {
-        self.time
-    }
-
-    /// Steps taken.
-    pub fn steps(&self) -> u64 {
-        self.steps
-    }
-
-    /// Current positions (m).
-    pub fn positions(&self) -> &[Vec3] {
-        &self.y
-    }
-
-    /// Current velocities (m/s).
-    pub fn velocities(&self) -> &[Vec3] {
-        &self.v
-    }
-
-    /// Velocities to set initial conditions (m/s).
-    pub fn velocities_mut(&mut self) -> &mut [Vec3] {
-        &mut self.v
-    }
-
-    /// Sets positions (m) and recomputes forces (history advances as in a step).
-    pub fn set_positions(&mut self, y: &[Vec3]) {
-        self.y.copy_from_slice(y);
-        self.model.update_forces(&self.y, &mut self.f);
-    }
-
-    /// Internal forces at the current positions (N).
-    pub fn forces(&self) -> &[Vec3] {
-        &self.f
-    }
-
-    /// The loads (e.g. to change damping between phases).
-    pub fn loads_mut(&mut self) -> &mut Loads {
-        &mut self.loads
-    }
-
-    /// The model.
-    pub fn model(&self) -> &M {
-        &self.model
-    }
-
-    /// The model, mutably.
-    pub fn model_mut(&mut self) -> &mut M {
-        &mut self.model
-    }
-
-    /// Kinetic energy (J).
-    pub fn kinetic_energy(&self) -> f64 {
-        energy::kinetic_energy(self.model.masses(), &self.v)
-    }
-
-    /// Elastic energy at the current positions (J).
-    pub fn elastic_energy(&mut self) -> f64 {
-        self.model.elastic_energy(&self.y)
     }
 }

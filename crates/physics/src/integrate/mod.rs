@@ -1,5 +1,10 @@
-//! Time integrators.
+//! Time integrators and the simulation they advance.
 
 pub mod explicit;
+pub mod implicit;
+pub mod simulation;
+mod step_matrix;
 
-pub use explicit::{Explicit, ExplicitConfig, External, TimeStep};
+pub use explicit::{Explicit, ExplicitConfig, TimeStep, VelocityVerlet};
+pub use implicit::{Implicit, ImplicitConfig, QuasiNewton, StepInfo};
+pub use simulation::{Integrator, Simulation, Solver, SolverStats};

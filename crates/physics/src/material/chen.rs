@@ -145,15 +145,7 @@ impl ChenModel {
             mat.validate(m)?;
         }
         let n = disc.len();
-        for (i, &id) in disc.materials().iter().enumerate() {
-            if id as usize >= materials.len() {
-                return Err(PhysicsError::UnknownMaterial {
-                    particle: i,
-                    material: id,
-                    count: materials.len(),
-                });
-            }
-        }
+        disc.check_material_ids(materials.len())?;
         let delta = disc.horizon();
         let mat = |i: usize| &materials[disc.materials()[i] as usize];
         let fam = disc.family();
@@ -357,6 +349,10 @@ impl ForceModel for ChenModel {
         self.setup.disc.len()
     }
 
+    fn discretization(&self) -> &Discretization {
+        &self.setup.disc
+    }
+
     fn masses(&self) -> &[f64] {
         &self.setup.mass
     }
@@ -436,6 +432,10 @@ impl ForceModel for ChenModel {
             }
         }
         dt
+    }
+
+    fn damage(&self) -> Option<&Damage> {
+        self.damage.as_ref()
     }
 
     fn memory_bytes(&self) -> usize {

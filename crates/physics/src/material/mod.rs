@@ -1,13 +1,23 @@
 //! Materials: parameters and the force-model interface the integrators drive.
 
+pub mod basis;
 pub mod chen;
 pub(crate) mod kernel;
 pub mod params;
+pub mod xu;
+mod xu_guard;
+pub(crate) mod xu_kernel;
+pub mod xu_params;
 
+pub use basis::{Basis, Curve};
 pub use chen::{ChenModel, ChenOptions};
 pub use params::{ChenMaterial, FractureParams, YieldParams};
+pub use xu::{XuKernelShape, XuModel, XuOptions};
+pub use xu_params::{XuAnisotropy, XuMaterial, XuModuli};
 
+use crate::fracture::Damage;
 use crate::math::Vec3;
+use crate::particles::Discretization;
 
 /// A constitutive model over a fixed discretisation: the integrators see only this interface, so
 /// other models (Xu's hyperelastic energy) and other integrators (implicit) plug in beside it.
@@ -15,6 +25,9 @@ use crate::math::Vec3;
 pub trait ForceModel: Send {
     /// Number of particles.
     fn num_particles(&self) -> usize;
+
+    /// The particles and their families.
+    fn discretization(&self) -> &Discretization;
 
     /// Particle masses (kg).
     fn masses(&self) -> &[f64];
@@ -38,11 +51,19 @@ pub trait ForceModel: Send {
 
     /// Heap bytes owned by the model (discretisation, state, buffers).
     fn memory_bytes(&self) -> usize;
+
+    /// Damage state, when some material fractures.
+    fn damage(&self) -> Option<&Damage> {
+        None
+    }
 }
 
 impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
     fn num_particles(&self) -> usize {
         (**self).num_particles()
+    }
+    fn discretization(&self) -> &Discretization {
+        (**self).discretization()
     }
     fn masses(&self) -> &[f64] {
         (**self).masses()
@@ -64,5 +85,25 @@ impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
     }
     fn memory_bytes(&self) -> usize {
         (**self).memory_bytes()
+    }
+    fn damage(&self) -> Option<&Damage> {
+        (**self).damage()
+    }
+}
+
+/// A model the implicit quasi-Newton step can drive: it has an energy whose negative gradient
+/// its forces are, and a rest stiffness per bond for the step's constant matrix.
+pub trait QuasiNewtonModel: ForceModel {
+    /// Writes the rest stiffness `k_ij` (N/m) of every directed bond into `out` (one entry per
+    /// bond, in CSR order), 0 for broken bonds: `sum_bonds k_ij (e_i - e_j)(e_i - e_j)^T`
+    /// is the model's part of the step matrix.
+    fn bond_stiffness(&self, out: &mut [f64]);
+
+    /// Elastic energy (J) and internal forces (N) at `y` with the current history, leaving
+    /// every internal state unchanged.
+    fn energy_and_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) -> f64 {
+        let e = self.elastic_energy(y);
+        self.trial_forces(y, forces);
+        e
     }
 }

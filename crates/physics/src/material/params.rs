@@ -21,6 +21,29 @@ pub struct FractureParams {
     pub alpha: f64,
 }
 
+impl FractureParams {
+    /// Checks `s_crit > 0` (infinity allowed) and a finite `alpha >= 0`; `index` names the
+    /// material in the error.
+    pub fn validate(&self, index: usize) -> Result<(), PhysicsError> {
+        if self.s_crit.is_nan() || self.s_crit <= 0.0 {
+            return Err(bad(
+                index,
+                format!(
+                    "s_crit {} must be positive (infinity: no fracture)",
+                    self.s_crit
+                ),
+            ));
+        }
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return Err(bad(
+                index,
+                format!("alpha {} must be finite and >= 0", self.alpha),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// One material region of the Chen model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChenMaterial {
@@ -127,21 +150,7 @@ impl ChenMaterial {
             }
         }
         if let Some(f) = self.fracture {
-            if f.s_crit.is_nan() || f.s_crit <= 0.0 {
-                return Err(bad(
-                    index,
-                    format!(
-                        "s_crit {} must be positive (infinity: no fracture)",
-                        f.s_crit
-                    ),
-                ));
-            }
-            if !(f.alpha.is_finite() && f.alpha >= 0.0) {
-                return Err(bad(
-                    index,
-                    format!("alpha {} must be finite and >= 0", f.alpha),
-                ));
-            }
+            f.validate(index)?;
         }
         if let Some(g) = self.anisotropy {
             if !g.iter().flatten().all(|v| v.is_finite()) || det(&g).abs() < 1e-12 {

@@ -83,7 +83,7 @@ pub fn nonuniform(x: &[Vec3], amp: f64, l: f64) -> Vec<Vec3> {
 }
 
 /// Forces at `y` without touching the model's state (no return map).
-pub fn forces(m: &mut ChenModel, y: &[Vec3]) -> Vec<Vec3> {
+pub fn forces<M: ForceModel + ?Sized>(m: &mut M, y: &[Vec3]) -> Vec<Vec3> {
     let mut f = vec![[0.0; 3]; y.len()];
     m.trial_forces(y, &mut f);
     f
@@ -91,7 +91,13 @@ pub fn forces(m: &mut ChenModel, y: &[Vec3]) -> Vec<Vec3> {
 
 /// Largest `|f + dE/dy|` over `max |f|`, with `dE/dy` by central differences of step `h` (m) on
 /// every `stride`-th particle, where `f` are the forces at `y`.
-pub fn gradient_mismatch(m: &mut ChenModel, y: &[Vec3], f: &[Vec3], h: f64, stride: usize) -> f64 {
+pub fn gradient_mismatch<M: ForceModel + ?Sized>(
+    m: &mut M,
+    y: &[Vec3],
+    f: &[Vec3],
+    h: f64,
+    stride: usize,
+) -> f64 {
     let fmax = f.iter().map(|v| norm(*v)).fold(0.0, f64::max);
     let mut worst: f64 = 0.0;
     for i in (0..y.len()).step_by(stride) {
@@ -104,4 +110,78 @@ pub fn gradient_mismatch(m: &mut ChenModel, y: &[Vec3], f: &[Vec3], h: f64, stri
         }
     }
     worst
+}
+
+/// Least-squares slope of `v` against `u`.
+pub fn slope(u: &[f64], v: &[f64]) -> f64 {
+    let n = u.len() as f64;
+    let (mu, mv) = (u.iter().sum::<f64>() / n, v.iter().sum::<f64>() / n);
+    let cov: f64 = u.iter().zip(v).map(|(a, b)| (a - mu) * (b - mv)).sum();
+    let var: f64 = u.iter().map(|a| (a - mu) * (a - mu)).sum();
+    cov / var
+}
+
+/// Measured (E / `young`, nu) of the bar `m` of extent `size` (m, along x) with nominal
+/// Poisson's ratio `nu`, wave speed `sqrt(young / rho)`: both ends anchored (one fixed, one
+/// pulled to 0.1% strain), damped to rest. Strains are fitted over the middle third; the stress
+/// is the anchor reaction over the nominal cross-section.
+pub fn tension<M: ForceModel>(m: M, size: [f64; 3], nu: f64, young: f64, rho: f64) -> (f64, f64) {
+    use perifrac_physics::{Explicit, ExplicitConfig, Loads, TimeStep};
+    let x = m.discretization().rest_positions().to_vec();
+    let delta = m.discretization().horizon();
+    let len = size[0];
+    // the ends: particles within one horizon of them, so no free family is cut by an anchor
+    let left: Vec<u32> = (0..x.len() as u32)
+        .filter(|&i| x[i as usize][0] < delta)
+        .collect();
+    let right: Vec<u32> = (0..x.len() as u32)
+        .filter(|&i| x[i as usize][0] > len - delta)
+        .collect();
+    let c = (young / rho).sqrt();
+    let omega1 = std::f64::consts::PI * c / len;
+    let mut loads = Loads::new(x.len()).with_damping(2.0 * omega1).unwrap();
+    loads.anchor(&left, [0.0; 3]).unwrap();
+    loads.anchor(&right, [0.0; 3]).unwrap();
+    let cfg = ExplicitConfig {
+        dt: TimeStep::Auto { safety: 0.8 },
+        guard_fraction: 0.5,
+    };
+    let mut s = Explicit::new(m, &x, delta, loads, cfg).unwrap();
+    // start from the affine guess with the nominal Poisson contraction
+    let eps = 1e-3;
+    let (cy, cz) = (size[1] / 2.0, size[2] / 2.0);
+    let guess: Vec<[f64; 3]> = x
+        .iter()
+        .map(|p| {
+            let ex = eps * p[0].clamp(delta, len - delta);
+            [
+                p[0] + ex,
+                p[1] - nu * eps * (p[1] - cy),
+                p[2] - nu * eps * (p[2] - cz),
+            ]
+        })
+        .collect();
+    s.set_positions(&guess);
+    let steps = (40.0 / omega1 / s.dt()).ceil() as usize;
+    for _ in 0..steps {
+        s.step().unwrap();
+    }
+    let y = s.positions();
+    let mid: Vec<usize> = (0..x.len())
+        .filter(|&i| (x[i][0] - len / 2.0).abs() < len / 6.0)
+        .collect();
+    let ux: Vec<f64> = mid.iter().map(|&i| y[i][0] - x[i][0]).collect();
+    let uy: Vec<f64> = mid.iter().map(|&i| y[i][1] - x[i][1]).collect();
+    let uz: Vec<f64> = mid.iter().map(|&i| y[i][2] - x[i][2]).collect();
+    let px: Vec<f64> = mid.iter().map(|&i| x[i][0]).collect();
+    let py: Vec<f64> = mid.iter().map(|&i| x[i][1]).collect();
+    let pz: Vec<f64> = mid.iter().map(|&i| x[i][2]).collect();
+    let exx = slope(&px, &ux);
+    let eyy = 0.5 * (slope(&py, &uy) + slope(&pz, &uz));
+    let reaction: f64 = right
+        .iter()
+        .map(|&i| s.forces()[i as usize][0])
+        .sum::<f64>();
+    let stress = -reaction / (size[1] * size[2]);
+    (stress / exx / young, -eyy / exx)
 }

@@ -158,6 +158,21 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         if let Some(v) = a.velocity {
             ctx.finite3(&format!("anchor[{i}].velocity"), v)?;
         }
+        if let Some(w) = a.angular {
+            ctx.finite3(&format!("anchor[{i}].angular"), w)?;
+        }
+        match (a.center, a.angular) {
+            (Some(c), Some(_)) => {
+                ctx.finite3(&format!("anchor[{i}].center"), c)?;
+            }
+            (Some(_), None) => {
+                return Err(ctx.err(
+                    format!("anchor[{i}].center"),
+                    "is the centre of a rotation: give angular too",
+                ))
+            }
+            _ => {}
+        }
         if let Some(t) = a.until {
             ctx.non_negative(&format!("anchor[{i}].until"), t)?;
         }

@@ -1,6 +1,6 @@
 //! Gravity, damping, anchors (with release times) and initial velocities.
 
-use perifrac_physics::Loads;
+use perifrac_physics::{AnchorMotion, Loads};
 
 use crate::driver::Releases;
 use crate::error::SceneError;
@@ -26,8 +26,17 @@ pub(super) fn loads(
     let mut releases = Vec::new();
     for (k, a) in f.anchor.iter().enumerate() {
         let picked = select(ctx, &format!("anchor[{k}].region"), rest, Some(&a.region))?;
+        let velocity = a.velocity.unwrap_or([0.0; 3]);
+        let motion = match a.angular {
+            None => AnchorMotion::translation(velocity),
+            Some(angular) => AnchorMotion {
+                velocity,
+                angular,
+                center: a.center.unwrap_or_else(|| centroid(rest, &picked)),
+            },
+        };
         loads
-            .anchor(&picked, a.velocity.unwrap_or([0.0; 3]))
+            .anchor_motion(&picked, motion)
             .map_err(|e| ctx.physics(e))?;
         if let Some(t) = a.until {
             releases.push((t, picked));
@@ -64,6 +73,17 @@ pub(super) fn initial_velocities(
         }
     }
     Ok(v)
+}
+
+/// Mean rest position (m) of the particles `picked` (not empty).
+fn centroid(rest: &[[f64; 3]], picked: &[u32]) -> [f64; 3] {
+    let mut c = [0.0; 3];
+    for &p in picked {
+        for k in 0..3 {
+            c[k] += rest[p as usize][k];
+        }
+    }
+    c.map(|v| v / picked.len() as f64)
 }
 
 /// Particles whose rest position lies in `region` (all when `None`); an empty selection is an

@@ -1,14 +1,45 @@
-//! Chen materials from the scene's `[[material]]` tables.
+//! Materials from the scene's `[[material]]` tables: Chen's (the default) or Xu's, one model
+//! for the whole scene.
 
 use std::f64::consts::PI;
 
-use perifrac_physics::{ChenMaterial, FractureParams, YieldParams};
+use perifrac_physics::math::Mat3;
+use perifrac_physics::{ChenMaterial, FractureParams, XuMaterial, YieldParams};
 
 use crate::error::SceneError;
 use crate::schema::{MaterialSpec, SceneFile};
 
 use super::check::Ctx;
 use super::defaults;
+
+/// The scene's materials, all of one model.
+pub(super) enum Materials {
+    /// Chen's elastoplastic model.
+    Chen(Vec<ChenMaterial>),
+    /// Xu's hyperelastic model.
+    Xu(Vec<XuMaterial>),
+}
+
+impl Materials {
+    /// Largest Young's modulus (Pa), which scales the contact stiffness.
+    pub(super) fn max_young(&self) -> f64 {
+        match self {
+            Materials::Chen(m) => m.iter().map(|m| m.young()).fold(0.0, f64::max),
+            Materials::Xu(m) => m
+                .iter()
+                .map(super::xu_material::young_of)
+                .fold(0.0, f64::max),
+        }
+    }
+
+    /// The model's name in the scene file.
+    pub(super) fn name(&self) -> &'static str {
+        match self {
+            Materials::Chen(_) => "chen",
+            Materials::Xu(_) => "xu",
+        }
+    }
+}
 
 /// The scene's materials and the material id of every particle (rest barycentres `rest`, m):
 /// material 0 everywhere, then each later material over the particles in its region.
@@ -17,13 +48,24 @@ pub(super) fn materials_by_region(
     f: &SceneFile,
     rest: &[[f64; 3]],
     horizon: f64,
-) -> Result<(Vec<ChenMaterial>, Vec<u16>), SceneError> {
-    let materials = f
-        .material
-        .iter()
-        .enumerate()
-        .map(|(i, m)| chen_material(ctx, i, m, horizon))
-        .collect::<Result<Vec<_>, _>>()?;
+) -> Result<(Materials, Vec<u16>), SceneError> {
+    let model = scene_model(ctx, f)?;
+    let materials = match model {
+        "chen" => Materials::Chen(
+            f.material
+                .iter()
+                .enumerate()
+                .map(|(i, m)| chen_material(ctx, i, m, horizon))
+                .collect::<Result<Vec<_>, _>>()?,
+        ),
+        _ => Materials::Xu(
+            f.material
+                .iter()
+                .enumerate()
+                .map(|(i, m)| super::xu_material::xu_material(ctx, i, m))
+                .collect::<Result<Vec<_>, _>>()?,
+        ),
+    };
     let mut ids = vec![0u16; rest.len()];
     for (k, m) in f.material.iter().enumerate().skip(1) {
         let Some(r) = m.region else { continue };
@@ -44,15 +86,39 @@ pub(super) fn materials_by_region(
     Ok((materials, ids))
 }
 
-/// The Chen material of `material[i]`; `horizon` converts a yield strain to `Psi0`.
-fn chen_material(
-    ctx: &Ctx,
-    i: usize,
-    m: &MaterialSpec,
-    horizon: f64,
-) -> Result<ChenMaterial, SceneError> {
+/// The model every material names (`"chen"` when none does); mixing models is refused.
+pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<&'static str, SceneError> {
+    let mut chosen: Option<(&'static str, usize)> = None;
+    for (i, m) in f.material.iter().enumerate() {
+        let this = match m.model.as_deref() {
+            None | Some("chen") => "chen",
+            Some("xu") => "xu",
+            Some(other) => {
+                return Err(ctx.err(
+                    format!("material[{i}].model"),
+                    format!("\"{other}\": expected \"chen\" or \"xu\""),
+                ))
+            }
+        };
+        match chosen {
+            None => chosen = Some((this, i)),
+            Some((first, j)) if first != this => {
+                return Err(ctx.err(
+                    format!("material[{i}].model"),
+                    format!("\"{this}\", but material[{j}] is \"{first}\": one model per scene"),
+                ))
+            }
+            _ => {}
+        }
+    }
+    Ok(chosen.map_or("chen", |(m, _)| m))
+}
+
+/// `(kappa, mu)` (Pa) of `material[i]` from `young` + `poisson` or `bulk_modulus` +
+/// `shear_modulus`.
+pub(super) fn elasticity(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<(f64, f64), SceneError> {
     let key = format!("material[{i}]");
-    let mut mat = match (m.young, m.poisson, m.bulk_modulus, m.shear_modulus) {
+    match (m.young, m.poisson, m.bulk_modulus, m.shear_modulus) {
         (Some(e), Some(nu), None, None) => {
             ctx.positive(&format!("{key}.young"), e, "Pa")?;
             if !(nu > -1.0 && nu < 0.5) {
@@ -61,21 +127,27 @@ fn chen_material(
                     format!("{nu} must be in (-1, 0.5)"),
                 ));
             }
-            ChenMaterial::from_young_poisson(e, nu, m.density)
-                .map_err(|e| ctx.err(&key, e.to_string()))?
+            Ok((e / (3.0 * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu))))
         }
         (None, None, Some(k), Some(mu)) => {
             ctx.positive(&format!("{key}.bulk_modulus"), k, "Pa")?;
             ctx.positive(&format!("{key}.shear_modulus"), mu, "Pa")?;
-            ChenMaterial::elastic(k, mu, m.density)
+            Ok((k, mu))
         }
-        _ => {
-            return Err(ctx.err(
-                &key,
-                "give the elasticity as young + poisson, or as bulk_modulus + shear_modulus",
-            ))
-        }
-    };
+        _ => Err(ctx.err(
+            &key,
+            "give the elasticity as young + poisson, or as bulk_modulus + shear_modulus",
+        )),
+    }
+}
+
+/// The fracture criterion of `material[i]`, if it breaks.
+pub(super) fn fracture(
+    ctx: &Ctx,
+    i: usize,
+    m: &MaterialSpec,
+) -> Result<Option<FractureParams>, SceneError> {
+    let key = format!("material[{i}]");
     if let Some(s) = m.s_crit {
         if s.is_nan() || s <= 0.0 {
             return Err(ctx.err(
@@ -84,15 +156,85 @@ fn chen_material(
             ));
         }
         let alpha = ctx.non_negative(&format!("{key}.alpha"), m.alpha.unwrap_or(0.0))?;
-        if s.is_finite() {
-            mat.fracture = Some(FractureParams { s_crit: s, alpha });
-        }
+        Ok(s.is_finite().then_some(FractureParams { s_crit: s, alpha }))
     } else if m.alpha.is_some() {
-        return Err(ctx.err(
+        Err(ctx.err(
             format!("{key}.alpha"),
             "alpha scales the fracture threshold: give s_crit too",
-        ));
+        ))
+    } else {
+        Ok(None)
     }
+}
+
+/// The orthonormal axes of `material[i]` as the columns of a matrix (identity by default).
+pub(super) fn axes(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<Mat3, SceneError> {
+    let Some(a) = m.axes else {
+        return Ok(perifrac_physics::math::IDENTITY);
+    };
+    let key = format!("material[{i}].axes");
+    if m.anisotropy.is_none() {
+        return Err(ctx.err(&key, "orient an anisotropy: give anisotropy too"));
+    }
+    let mut unit = [[0.0; 3]; 3];
+    for (k, v) in a.iter().enumerate() {
+        unit[k] = ctx.direction(&format!("{key}[{k}]"), *v)?;
+    }
+    let dot = perifrac_physics::math::dot;
+    for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+        let c = dot(unit[p], unit[q]);
+        if c.abs() > 1e-6 {
+            return Err(ctx.err(
+                &key,
+                format!("axes {p} and {q} are not perpendicular (cosine {c:.3e})"),
+            ));
+        }
+    }
+    Ok([0, 1, 2].map(|r| [unit[0][r], unit[1][r], unit[2][r]]))
+}
+
+/// Keys of one model given to a material of the other.
+fn refuse_keys(ctx: &Ctx, i: usize, model: &str, keys: &[(&str, bool)]) -> Result<(), SceneError> {
+    match keys.iter().find(|(_, given)| *given) {
+        Some((k, _)) => Err(ctx.err(
+            format!("material[{i}].{k}"),
+            format!("is not a key of model \"{model}\""),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The Chen material of `material[i]`; `horizon` converts a yield strain to `Psi0`.
+fn chen_material(
+    ctx: &Ctx,
+    i: usize,
+    m: &MaterialSpec,
+    horizon: f64,
+) -> Result<ChenMaterial, SceneError> {
+    let key = format!("material[{i}]");
+    refuse_keys(
+        ctx,
+        i,
+        "chen",
+        &[
+            ("energy", m.energy.is_some()),
+            ("g", m.g.is_some()),
+            ("h", m.h.is_some()),
+            ("moduli", m.moduli.is_some()),
+        ],
+    )?;
+    let mut mat = match (m.young, m.poisson) {
+        (Some(e), Some(nu)) => {
+            elasticity(ctx, i, m)?;
+            ChenMaterial::from_young_poisson(e, nu, m.density)
+                .map_err(|e| ctx.err(&key, e.to_string()))?
+        }
+        _ => {
+            let (k, mu) = elasticity(ctx, i, m)?;
+            ChenMaterial::elastic(k, mu, m.density)
+        }
+    };
+    mat.fracture = fracture(ctx, i, m)?;
     let psi0 = match (m.yield_psi0, m.yield_strain) {
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key, "give either yield_psi0 or yield_strain, not both"))
@@ -128,7 +270,17 @@ fn chen_material(
         for (k, &s) in g.iter().enumerate() {
             ctx.positive(&format!("{key}.anisotropy[{k}]"), s, "")?;
         }
-        mat.anisotropy = Some([[g[0], 0.0, 0.0], [0.0, g[1], 0.0], [0.0, 0.0, g[2]]]);
+        // G = A diag(g) A^T with the axes as the columns of A
+        let a = axes(ctx, i, m)?;
+        let mut big_g = [[0.0; 3]; 3];
+        for (r, row) in big_g.iter_mut().enumerate() {
+            for (c, v) in row.iter_mut().enumerate() {
+                *v = (0..3).map(|k| a[r][k] * g[k] * a[c][k]).sum();
+            }
+        }
+        mat.anisotropy = Some(big_g);
+    } else {
+        axes(ctx, i, m)?;
     }
     mat.validate(i).map_err(|e| ctx.err(&key, e.to_string()))?;
     Ok(mat)

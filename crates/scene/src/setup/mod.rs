@@ -9,13 +9,13 @@ mod material;
 mod math;
 mod mesh;
 mod radii;
+mod solver;
 mod step;
+mod xu_material;
 
 use std::path::PathBuf;
 
-use perifrac_physics::{
-    ChenModel, Discretization, Explicit, ExplicitConfig, ForceModel, PhysicsError, TimeStep,
-};
+use perifrac_physics::{Discretization, PhysicsError};
 
 use crate::driver::Driver;
 use crate::error::SceneError;
@@ -55,6 +55,10 @@ pub mod defaults {
     /// this fraction of the mean contact radius per step, so that a contact builds up over
     /// several steps instead of appearing at full depth in one.
     pub const TRAVEL_FRACTION: f64 = 0.1;
+    /// The implicit step's `dt = "auto"` keeps the fastest body at the start from moving more
+    /// than this fraction of the mean contact radius per step: the contact potential is then
+    /// seen within a step, never tunnelled through.
+    pub const IMPLICIT_TRAVEL_FRACTION: f64 = 1.0;
 }
 
 /// What the run writes besides the surface PLY.
@@ -77,7 +81,8 @@ pub struct SetupInfo {
     pub horizon: f64,
     /// Mean tet edge length (m).
     pub edge_length: f64,
-    /// Stable step estimate (s), contact stiffness included.
+    /// Stable step estimate of the explicit integrator (s), contact stiffness included (for
+    /// an implicit scene: how far its step is beyond it).
     pub dt_limit: f64,
     /// Longest step (s) in which the fastest ball or particle at the start moves
     /// [`defaults::TRAVEL_FRACTION`] of the mean contact radius; infinite without colliders.
@@ -92,6 +97,10 @@ pub struct SetupInfo {
     pub rest_bounds: ([f64; 3], [f64; 3]),
     /// Crack faces cut at the start.
     pub precrack_faces: usize,
+    /// The force model (`"chen"`, `"xu"`).
+    pub model: &'static str,
+    /// The integrator (`"explicit"`, `"implicit"`).
+    pub integrator: &'static str,
 }
 
 /// A scene ready to run.
@@ -119,6 +128,14 @@ impl Setup {
         let ctx = Ctx { file: &scene.path };
         let f = &scene.file;
         check::check_settings(&ctx, f)?;
+        let kind = solver::kind(&ctx, &f.simulation)?;
+        if kind == solver::Kind::Implicit && material::scene_model(&ctx, f)? == "chen" {
+            return Err(ctx.err(
+                "simulation.integrator",
+                "\"implicit\" needs an energy with a rest stiffness: give the materials \
+                 model = \"xu\" (Chen's elastoplastic model steps explicitly)",
+            ));
+        }
         let physics = |cause: PhysicsError| ctx.physics(cause);
 
         let mut mesh = mesh::build_mesh(&ctx, scene)?;
@@ -133,11 +150,11 @@ impl Setup {
         let (mut disc, report) =
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
         disc.set_materials(&ids).map_err(physics)?;
-        let mut model = ChenModel::new(disc, &materials).map_err(physics)?;
+        let mut model = solver::model(&ctx, sim, disc, &materials)?;
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;
-        let young = materials.iter().map(|m| m.young()).fold(0.0, f64::max);
+        let young = materials.max_young();
         let gravity = sim.gravity.unwrap_or([0.0; 3]);
         let colliders = colliders::build_colliders(&ctx, f, young, mean_radius, gravity)?;
         if let Some((col, _)) = &colliders {
@@ -146,23 +163,42 @@ impl Setup {
         let contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
 
         let velocities = loads::initial_velocities(&ctx, f, &rest)?;
-        let dt_limit = step::stable_limit(&mut model, &rest, horizon, contact);
-        let travel_limit = colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
-            step::travel_limit(c, mean_radius, &velocities)
-        });
-        let dt_wanted = step::requested_step(&ctx, sim, dt_limit, travel_limit)?;
+        let dt_limit = step::stable_limit(model.as_dyn(), &rest, horizon, contact);
+        let travel = |fraction| {
+            colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
+                step::travel_limit(c, mean_radius, &velocities, fraction)
+            })
+        };
         let frames = frames
             .or(f.output.frames)
             .unwrap_or(defaults::FRAMES)
             .max(1);
+        let (dt_wanted, travel_limit) = match kind {
+            solver::Kind::Explicit => {
+                let travel_limit = travel(defaults::TRAVEL_FRACTION);
+                (
+                    step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
+                    travel_limit,
+                )
+            }
+            solver::Kind::Implicit => {
+                let travel_limit = travel(defaults::IMPLICIT_TRAVEL_FRACTION);
+                (
+                    step::implicit_step(&ctx, sim, frames, travel_limit)?,
+                    travel_limit,
+                )
+            }
+        };
         let (dt, steps_per_frame) = step::fit_to_frames(sim.duration, frames, dt_wanted);
 
         let (loads, releases) = loads::loads(&ctx, f, &rest, gravity)?;
-        let config = ExplicitConfig {
-            dt: TimeStep::Fixed(dt),
-            guard_fraction: defaults::GUARD_FRACTION,
+        let start = solver::Start {
+            rest: &rest,
+            horizon,
+            loads,
+            dt,
         };
-        let mut solver = Explicit::new(model, &rest, horizon, loads, config).map_err(physics)?;
+        let mut solver = solver::build(&ctx, sim, kind, model, start)?;
         solver.velocities_mut().copy_from_slice(&velocities);
 
         let info = SetupInfo {
@@ -174,6 +210,8 @@ impl Setup {
             travel_limit,
             dt,
             mass: solver.model().masses().iter().sum(),
+            model: materials.name(),
+            integrator: solver.integrator_name(),
             up: math::up_from_gravity(gravity),
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,

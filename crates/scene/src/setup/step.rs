@@ -3,7 +3,7 @@
 
 use perifrac_contact::Colliders;
 use perifrac_physics::math::norm;
-use perifrac_physics::{stable_frequency, ChenModel, ForceModel};
+use perifrac_physics::{stable_frequency, ForceModel};
 
 use crate::error::SceneError;
 use crate::schema::{DtSpec, SimulationSpec};
@@ -17,7 +17,7 @@ use super::defaults;
 /// contact springs on the lightest particle, and the fastest dynamic ball on the particles it
 /// touches (see [`ContactStiffness`]), with the lightest particle's mass from `model`.
 pub(super) fn stable_limit(
-    model: &mut ChenModel,
+    model: &mut dyn ForceModel,
     rest: &[[f64; 3]],
     horizon: f64,
     contact: ContactStiffness,
@@ -28,19 +28,38 @@ pub(super) fn stable_limit(
 }
 
 /// The longest step (s) in which the fastest ball (by its initial velocity) or particle (by
-/// `velocities`, m/s) moves [`defaults::TRAVEL_FRACTION`] of the mean contact radius
-/// (`r_mean`, m; the mean, because a few slivers at the surface must not set the pace for
-/// all); infinite when nothing moves.
-pub(super) fn travel_limit(colliders: &Colliders, r_mean: f64, velocities: &[[f64; 3]]) -> f64 {
+/// `velocities`, m/s) moves `fraction` of the mean contact radius (`r_mean`, m; the mean,
+/// because a few slivers at the surface must not set the pace for all); infinite when nothing
+/// moves.
+pub(super) fn travel_limit(
+    colliders: &Colliders,
+    r_mean: f64,
+    velocities: &[[f64; 3]],
+    fraction: f64,
+) -> f64 {
     let v_max = colliders
         .balls()
         .map(|b| norm(b.velocity))
         .chain(velocities.iter().map(|&v| norm(v)))
         .fold(0.0, f64::max);
     if v_max > 0.0 {
-        defaults::TRAVEL_FRACTION * r_mean / v_max
+        fraction * r_mean / v_max
     } else {
         f64::INFINITY
+    }
+}
+
+/// The scene's `dt`: `None` for `"auto"` (or no `dt`), a positive number of seconds, or an
+/// error for anything else.
+fn fixed_step(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>, SceneError> {
+    match &sim.dt {
+        None => Ok(None),
+        Some(DtSpec::Word(w)) if w == "auto" => Ok(None),
+        Some(DtSpec::Word(w)) => Err(ctx.err(
+            "simulation.dt",
+            format!("\"{w}\": expected \"auto\" or a step in seconds"),
+        )),
+        Some(DtSpec::Seconds(dt)) => ctx.positive("simulation.dt", *dt, "s").map(Some),
     }
 }
 
@@ -53,28 +72,43 @@ pub(super) fn requested_step(
     dt_limit: f64,
     travel_limit: f64,
 ) -> Result<f64, SceneError> {
-    let auto = || (sim.safety.unwrap_or(defaults::SAFETY) * dt_limit).min(travel_limit);
-    match &sim.dt {
-        None => Ok(auto()),
-        Some(DtSpec::Word(w)) if w == "auto" => Ok(auto()),
-        Some(DtSpec::Word(w)) => Err(ctx.err(
+    let Some(dt) = fixed_step(ctx, sim)? else {
+        return Ok((sim.safety.unwrap_or(defaults::SAFETY) * dt_limit).min(travel_limit));
+    };
+    let most = defaults::MAX_FIXED_FRACTION * dt_limit;
+    if dt > most {
+        return Err(ctx.err(
             "simulation.dt",
-            format!("\"{w}\": expected \"auto\" or a step in seconds"),
-        )),
-        Some(DtSpec::Seconds(dt)) => {
-            let dt = ctx.positive("simulation.dt", *dt, "s")?;
-            let most = defaults::MAX_FIXED_FRACTION * dt_limit;
-            if dt > most {
-                return Err(ctx.err(
-                    "simulation.dt",
-                    format!(
-                        "{dt:e} s is above the stable limit: the estimate is {dt_limit:.3e} s \
-                         (keep dt <= {most:.3e} s, or write dt = \"auto\")"
-                    ),
-                ));
-            }
-            Ok(dt)
+            format!(
+                "{dt:e} s is above the stable limit: the estimate is {dt_limit:.3e} s \
+                 (keep dt <= {most:.3e} s, or write dt = \"auto\")"
+            ),
+        ));
+    }
+    Ok(dt)
+}
+
+/// The implicit step the scene asks for (s): `dt` in seconds, or `"auto"`: the frame
+/// (`duration / frames`) over `steps_per_frame` (default 1), and at most `travel_limit` (the
+/// step in which the fastest body moves [`defaults::IMPLICIT_TRAVEL_FRACTION`] of a contact
+/// radius). No stability limit applies.
+pub(super) fn implicit_step(
+    ctx: &Ctx,
+    sim: &SimulationSpec,
+    frames: usize,
+    travel_limit: f64,
+) -> Result<f64, SceneError> {
+    match fixed_step(ctx, sim)? {
+        None => {
+            let frame_dt = sim.duration / frames as f64;
+            let per_frame = sim.steps_per_frame.unwrap_or(1).max(1) as f64;
+            Ok((frame_dt / per_frame).min(travel_limit))
         }
+        Some(_) if sim.steps_per_frame.is_some() => Err(ctx.err(
+            "simulation.steps_per_frame",
+            "give either dt in seconds or steps_per_frame, not both",
+        )),
+        Some(dt) => Ok(dt),
     }
 }
 

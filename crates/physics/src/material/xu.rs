@@ -1,0 +1,579 @@
+//! Xu's hyperelastic peridynamic model (MODEL.md section 5): normalised weights, dilatation from
+//! stretch ratios, `W_i = lambda g(theta_i) + mu sum_j w_ij V_j G_ij h(tau_ij)`, forces as the
+//! exact negative gradient of `E = sum_i V_i W_i`, bond breaking as in Chen's model, and an
+//! optional inversion guard ([`super::xu_guard`]).
+
+use super::basis::Curve;
+use super::kernel::{AllAlive, Mask, NoPlastic};
+use super::xu_guard::Guard;
+use super::xu_kernel::{
+    bond_energy_sum, dilatation_sum, force, force_and_energy, LinearH, NeoHookeanH, PerParticleH,
+    Stored, StvkH, Unit, XuInputs,
+};
+use super::{ForceModel, QuasiNewtonModel, XuMaterial};
+use crate::error::PhysicsError;
+use crate::fracture::Damage;
+use crate::math::{sub, Vec3};
+use crate::par::{map_particles, map_particles2};
+use crate::particles::Discretization;
+
+/// The influence function `wt(r / delta)` before normalisation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum XuKernelShape {
+    /// `wt = 1`: every bond of the family weighs the same.
+    #[default]
+    Constant,
+    /// `wt = 1 / (1 + r / delta)`: the paper's Figure 9, left.
+    Inverse,
+    /// `wt = r / delta`: the paper's Figure 9, right.
+    Linear,
+}
+
+impl XuKernelShape {
+    /// `wt(rho)` at `rho = r / delta`.
+    pub fn weight(self, rho: f64) -> f64 {
+        match self {
+            XuKernelShape::Constant => 1.0,
+            XuKernelShape::Inverse => 1.0 / (1.0 + rho),
+            XuKernelShape::Linear => rho,
+        }
+    }
+}
+
+/// Choices of Xu's model fixed at setup.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct XuOptions {
+    /// The influence function.
+    pub kernel: XuKernelShape,
+    /// The inversion guard's factor on the rest bond stiffness (MODEL.md section 5), `None`:
+    /// no guard.
+    pub inversion_guard: Option<f64>,
+}
+
+/// What is fixed at setup.
+#[derive(Debug, Clone)]
+struct Setup {
+    disc: Discretization,
+    mass: Vec<f64>,
+    /// `lambda_i`, `mu_i` (Pa).
+    lambda: Vec<f64>,
+    mu: Vec<f64>,
+    /// `g` and `h` of each material, and each particle's material.
+    g: Vec<Curve>,
+    h: Vec<Curve>,
+    /// `wt(r / delta) / r` per directed bond (1/m).
+    wr: Vec<f64>,
+    /// `G_ij` with the owner's axes and with the neighbour's, when some material is anisotropic.
+    kernel: Option<(Vec<f64>, Vec<f64>)>,
+    /// Rest curvatures `(lambda_i g_i''(1), mu_i h_i''(1))` (Pa).
+    curvature: Vec<[f64; 2]>,
+    options: XuOptions,
+}
+
+impl Setup {
+    fn inputs<'a>(&'a self, y: &'a [Vec3]) -> XuInputs<'a> {
+        XuInputs {
+            family: self.disc.family(),
+            y,
+            volumes: self.disc.volumes(),
+            wr: &self.wr,
+        }
+    }
+}
+
+/// Xu's model over one discretisation, with its state and buffers.
+#[derive(Debug, Clone)]
+pub struct XuModel {
+    setup: Setup,
+    damage: Option<Damage>,
+    /// `1 / sum_j wt_ij V_j` over the intact bonds (1/m^3; 0 without bonds).
+    inv_norm: Vec<f64>,
+    theta: Vec<f64>,
+    /// `[inv_norm lambda g'(theta), inv_norm mu]` per particle from the last dilatation pass.
+    pq: Vec<[f64; 2]>,
+    scratch: Vec<f64>,
+    guard: Option<Guard>,
+}
+
+/// Binds `$h` (bond curve), `$g` (kernel) and `$d` (damage mask) to concrete types and expands
+/// `$body` once per combination.
+macro_rules! with_hgd {
+    ($s:expr, $damage:expr, |$h:ident, $g:ident, $d:ident| $body:expr) => {
+        match $damage {
+            None => {
+                let $d = AllAlive;
+                with_hgd!(@g $s, $h, $g, $body)
+            }
+            Some(dm) => {
+                let $d = Mask(dm.bond_state());
+                with_hgd!(@g $s, $h, $g, $body)
+            }
+        }
+    };
+    (@g $s:expr, $h:ident, $g:ident, $body:expr) => {
+        match &$s.kernel {
+            None => {
+                let $g = Unit;
+                with_hgd!(@h $s, $h, $body)
+            }
+            Some((own, other)) => {
+                let $g = Stored { own, other };
+                with_hgd!(@h $s, $h, $body)
+            }
+        }
+    };
+    (@h $s:expr, $h:ident, $body:expr) => {{
+        let uniform = $s.h.iter().all(|c| *c == $s.h[0]);
+        match (&$s.h[0], uniform) {
+            (Curve::Linear, true) => {
+                let $h = LinearH;
+                $body
+            }
+            (Curve::NeoHookean, true) => {
+                let $h = NeoHookeanH;
+                $body
+            }
+            (Curve::Stvk, true) => {
+                let $h = StvkH;
+                $body
+            }
+            _ => {
+                let $h = PerParticleH {
+                    curves: &$s.h,
+                    material: $s.disc.materials(),
+                    uniform,
+                };
+                $body
+            }
+        }
+    }};
+}
+
+impl XuModel {
+    /// Sets up the model with `materials[id]` for each particle's material id.
+    pub fn new(
+        disc: Discretization,
+        materials: &[XuMaterial],
+        options: XuOptions,
+    ) -> Result<Self, PhysicsError> {
+        for (m, mat) in materials.iter().enumerate() {
+            mat.validate(m)?;
+        }
+        if let Some(f) = options.inversion_guard {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(PhysicsError::BadSetting(format!(
+                    "inversion guard factor {f} must be positive and finite"
+                )));
+            }
+        }
+        let n = disc.len();
+        disc.check_material_ids(materials.len())?;
+        let mat = |i: usize| &materials[disc.materials()[i] as usize];
+        let fam = disc.family();
+        let delta = disc.horizon();
+        let wr: Vec<f64> = (0..n)
+            .flat_map(|i| fam.range(i))
+            .map(|k| {
+                let r = fam.rest_lengths()[k];
+                options.kernel.weight(r / delta) / r
+            })
+            .collect();
+        let anisotropic = materials.iter().any(|m| m.anisotropy.is_some());
+        let kernel = anisotropic.then(|| {
+            let x = disc.rest_positions();
+            let mut own = vec![1.0; fam.num_bonds()];
+            let mut other = vec![1.0; fam.num_bonds()];
+            for i in 0..n {
+                for k in fam.range(i) {
+                    let j = fam.neighbours()[k] as usize;
+                    let xi = sub(x[j], x[i]);
+                    own[k] = mat(i).anisotropy.map_or(1.0, |a| a.factor(xi));
+                    other[k] = mat(j).anisotropy.map_or(1.0, |a| a.factor(xi));
+                }
+            }
+            (own, other)
+        });
+        let fractures = materials.iter().any(XuMaterial::fractures);
+        let damage = fractures.then(|| {
+            let s_crit = (0..n)
+                .map(|i| mat(i).fracture.map_or(f64::INFINITY, |f| f.s_crit))
+                .collect();
+            let alpha = (0..n)
+                .map(|i| mat(i).fracture.map_or(0.0, |f| f.alpha))
+                .collect();
+            Damage::new(fam, s_crit, alpha)
+        });
+        let setup = Setup {
+            mass: (0..n).map(|i| mat(i).density * disc.volumes()[i]).collect(),
+            lambda: (0..n).map(|i| mat(i).lambda).collect(),
+            mu: (0..n).map(|i| mat(i).mu).collect(),
+            g: materials.iter().map(|m| m.g.clone()).collect(),
+            h: materials.iter().map(|m| m.h.clone()).collect(),
+            curvature: (0..n)
+                .map(|i| {
+                    let m = mat(i);
+                    [m.lambda * m.g.rest_curvature(), m.mu * m.h.rest_curvature()]
+                })
+                .collect(),
+            wr,
+            kernel,
+            options,
+            disc,
+        };
+        let mut model = XuModel {
+            inv_norm: vec![0.0; n],
+            theta: vec![1.0; n],
+            pq: vec![[0.0; 2]; n],
+            scratch: vec![0.0; n],
+            guard: options.inversion_guard.map(|f| Guard::new(n, f)),
+            damage,
+            setup,
+        };
+        model.normalise(None);
+        Ok(model)
+    }
+
+    /// The options chosen at setup.
+    pub fn options(&self) -> XuOptions {
+        self.setup.options
+    }
+
+    /// Dilatation `theta_i` of each particle from the last force or energy evaluation (1 at
+    /// rest).
+    pub fn dilatations(&self) -> &[f64] {
+        &self.theta
+    }
+
+    /// Normalised weight `w_ij` (1/m^3) of directed bond `k` of particle `i`.
+    pub fn weight(&self, i: usize, k: usize) -> f64 {
+        self.setup.wr[k] * self.setup.disc.family().rest_lengths()[k] * self.inv_norm[i]
+    }
+
+    /// `(G_ij, G_ji)` of directed bond `k`.
+    pub fn kernel(&self, k: usize) -> (f64, f64) {
+        self.setup
+            .kernel
+            .as_ref()
+            .map_or((1.0, 1.0), |(a, b)| (a[k], b[k]))
+    }
+
+    /// Recomputes `1 / sum_j wt_ij V_j` over intact bonds, for the particles in `touched` (all
+    /// when `None`), so `sum_j w_ij V_j = 1` stays true as bonds break and a broken body at rest
+    /// feels no force.
+    fn normalise(&mut self, touched: Option<&[(u32, u32)]>) {
+        let s = &self.setup;
+        let fam = s.disc.family();
+        let vol = s.disc.volumes();
+        let alive = self.damage.as_ref().map(|d| d.bond_state());
+        let one = |i: usize| {
+            let sum: f64 = fam
+                .range(i)
+                .filter(|&k| alive.is_none_or(|a| a[k] != 0))
+                .map(|k| s.wr[k] * fam.rest_lengths()[k] * vol[fam.neighbours()[k] as usize])
+                .sum();
+            if sum > 0.0 {
+                1.0 / sum
+            } else {
+                0.0
+            }
+        };
+        match touched {
+            None => map_particles(&mut self.inv_norm, one),
+            Some(pairs) => {
+                for &(i, j) in pairs {
+                    self.inv_norm[i as usize] = one(i as usize);
+                    self.inv_norm[j as usize] = one(j as usize);
+                }
+            }
+        }
+    }
+
+    /// `theta` and `pq` at `y`.
+    fn dilatation_pass(&mut self, y: &[Vec3]) {
+        let inp = self.setup.inputs(y);
+        let inv = &self.inv_norm;
+        match self.damage.as_ref() {
+            None => map_particles(&mut self.theta, |i| {
+                theta_of(inv[i], dilatation_sum(inp, AllAlive, i))
+            }),
+            Some(dm) => {
+                let d = Mask(dm.bond_state());
+                map_particles(&mut self.theta, |i| {
+                    theta_of(inv[i], dilatation_sum(inp, d, i))
+                })
+            }
+        }
+        let s = &self.setup;
+        let (theta, ids) = (&self.theta, s.disc.materials());
+        map_particles(&mut self.pq, |i| {
+            let g = &s.g[ids[i] as usize];
+            [inv[i] * s.lambda[i] * g.slope(theta[i]), inv[i] * s.mu[i]]
+        });
+    }
+
+    fn force_pass(&self, y: &[Vec3], forces: &mut [Vec3]) {
+        let inp = self.setup.inputs(y);
+        let pq = &self.pq;
+        let s = &self.setup;
+        with_hgd!(s, self.damage.as_ref(), |h, g, d| {
+            map_particles(forces, |i| force(inp, h, g, d, pq, i))
+        });
+        if let Some(guard) = &self.guard {
+            guard.add_forces(&self.guard_inputs(y), forces);
+        }
+    }
+
+    fn guard_inputs<'a>(&'a self, y: &'a [Vec3]) -> super::xu_guard::GuardInputs<'a> {
+        super::xu_guard::GuardInputs {
+            family: self.setup.disc.family(),
+            rest: self.setup.disc.rest_positions(),
+            y,
+            stiffness: BondStiffness { model: self },
+            alive: self.damage.as_ref().map(|d| d.bond_state()),
+        }
+    }
+
+    /// Rest stiffness `k_ij = V_i V_j (w_ij / r^2)(lambda_i g_i''(1) + mu_i G_ij h_i''(1))`
+    /// (N/m) of directed bond `k` of particle `i` (intact or not).
+    #[inline]
+    pub fn rest_bond_stiffness(&self, i: usize, k: usize) -> f64 {
+        let s = &self.setup;
+        let j = s.disc.family().neighbours()[k] as usize;
+        let gij = s.kernel.as_ref().map_or(1.0, |(own, _)| own[k]);
+        self.stiffness_from(i, j, k, gij)
+    }
+
+    /// `k_ji` (N/m) of the reverse of directed bond `k` of particle `i`.
+    #[inline]
+    pub fn reverse_bond_stiffness(&self, i: usize, k: usize) -> f64 {
+        let s = &self.setup;
+        let j = s.disc.family().neighbours()[k] as usize;
+        let gji = s.kernel.as_ref().map_or(1.0, |(_, other)| other[k]);
+        self.stiffness_from(j, i, k, gji)
+    }
+
+    /// `k` seen from `owner` across bond `k` (whose rest length and `wr` both ends share).
+    #[inline(always)]
+    fn stiffness_from(&self, owner: usize, other: usize, k: usize, g: f64) -> f64 {
+        let s = &self.setup;
+        let r = s.disc.family().rest_lengths()[k];
+        let [lg, mh] = s.curvature[owner];
+        let vol = s.disc.volumes();
+        vol[owner] * vol[other] * (s.wr[k] * self.inv_norm[owner] / r) * (lg + mh * g)
+    }
+
+    #[track_caller]
+    fn check_len(&self, y: &[Vec3], forces: Option<&[Vec3]>) {
+        let n = self.setup.disc.len();
+        assert_eq!(y.len(), n, "positions: one per particle");
+        if let Some(f) = forces {
+            assert_eq!(f.len(), n, "forces: one per particle");
+        }
+    }
+}
+
+/// The rest bond stiffness as the guard sees it.
+#[derive(Clone, Copy)]
+pub(crate) struct BondStiffness<'a> {
+    model: &'a XuModel,
+}
+
+impl BondStiffness<'_> {
+    /// `(k_ij, k_ji)` of directed bond `k` of particle `i` (N/m).
+    #[inline]
+    pub(crate) fn pair(&self, i: usize, k: usize) -> (f64, f64) {
+        (
+            self.model.rest_bond_stiffness(i, k),
+            self.model.reverse_bond_stiffness(i, k),
+        )
+    }
+}
+
+/// `theta = inv_norm * sum`, and the rest value 1 for a particle without intact bonds (its
+/// energy is then zero whatever `g`).
+#[inline(always)]
+fn theta_of(inv_norm: f64, sum: f64) -> f64 {
+    if inv_norm > 0.0 {
+        inv_norm * sum
+    } else {
+        1.0
+    }
+}
+
+impl ForceModel for XuModel {
+    fn num_particles(&self) -> usize {
+        self.setup.disc.len()
+    }
+
+    fn discretization(&self) -> &Discretization {
+        &self.setup.disc
+    }
+
+    fn masses(&self) -> &[f64] {
+        &self.setup.mass
+    }
+
+    fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.check_len(y, Some(forces));
+        if self.guard.is_some() {
+            let mut guard = self.guard.take().expect("checked");
+            guard.update(&self.guard_inputs(y));
+            self.guard = Some(guard);
+        }
+        self.dilatation_pass(y);
+        self.force_pass(y, forces);
+    }
+
+    fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.check_len(y, Some(forces));
+        self.dilatation_pass(y);
+        self.force_pass(y, forces);
+    }
+
+    fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
+        self.check_len(y, None);
+        self.dilatation_pass(y);
+        let s = &self.setup;
+        let inp = s.inputs(y);
+        let (theta, inv) = (&self.theta, &self.inv_norm);
+        let ids = s.disc.materials();
+        with_hgd!(s, self.damage.as_ref(), |h, g, d| {
+            map_particles(&mut self.scratch, |i| {
+                if inv[i] == 0.0 {
+                    return 0.0;
+                }
+                let dil = s.lambda[i] * s.g[ids[i] as usize].eval(theta[i]).0;
+                let bonds = s.mu[i] * inv[i] * bond_energy_sum(inp, h, g, d, i);
+                inp.volumes[i] * (dil + bonds)
+            })
+        });
+        let guard = self
+            .guard
+            .as_ref()
+            .map_or(0.0, |gd| gd.energy(&self.guard_inputs(y)));
+        self.scratch.iter().sum::<f64>() + guard
+    }
+
+    fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        let Some(damage) = self.damage.as_mut() else {
+            return;
+        };
+        let start = broken.len();
+        let s = &self.setup;
+        damage.check(s.disc.family(), y, s.disc.horizon(), NoPlastic, broken);
+        if broken.len() > start {
+            self.normalise(Some(&broken[start..]));
+        }
+    }
+
+    fn silling_askari_step(&self) -> f64 {
+        // sqrt(2 m_i / sum_j (k_ij + k_ji)) with the rest bond stiffness (N/m) of both ends
+        let fam = self.setup.disc.family();
+        let mut dt = f64::INFINITY;
+        for i in 0..fam.len() {
+            let sum: f64 = fam
+                .range(i)
+                .map(|k| self.rest_bond_stiffness(i, k) + self.reverse_bond_stiffness(i, k))
+                .sum();
+            if sum > 0.0 {
+                dt = dt.min((2.0 * self.setup.mass[i] / sum).sqrt());
+            }
+        }
+        dt
+    }
+
+    fn memory_bytes(&self) -> usize {
+        let XuModel {
+            setup,
+            damage,
+            inv_norm,
+            theta,
+            pq,
+            scratch,
+            guard,
+        } = self;
+        let Setup {
+            disc,
+            mass,
+            lambda,
+            mu,
+            g: _,
+            h: _,
+            wr,
+            kernel,
+            curvature,
+            options: _,
+        } = setup;
+        disc.memory_bytes()
+            + 8 * (mass.len() + lambda.len() + mu.len() + wr.len())
+            + kernel.as_ref().map_or(0, |(a, b)| 8 * (a.len() + b.len()))
+            + 16 * curvature.len()
+            + damage.as_ref().map_or(0, Damage::memory_bytes)
+            + 8 * (inv_norm.len() + theta.len() + scratch.len())
+            + 16 * pq.len()
+            + guard.as_ref().map_or(0, Guard::memory_bytes)
+    }
+
+    fn damage(&self) -> Option<&Damage> {
+        self.damage.as_ref()
+    }
+}
+
+impl QuasiNewtonModel for XuModel {
+    /// `k_ij`, times `1 + f` with the inversion guard of factor `f`: the guard's energy
+    /// `f/2 k |eta - F xi|^2` (lagged `F`) has exactly the Hessian `f k (e_i - e_j)(e_i - e_j)^T`.
+    fn bond_stiffness(&self, out: &mut [f64]) {
+        let scale = 1.0 + self.setup.options.inversion_guard.unwrap_or(0.0);
+        let fam = self.setup.disc.family();
+        assert_eq!(
+            out.len(),
+            fam.num_bonds(),
+            "one stiffness per directed bond"
+        );
+        let alive = self.damage.as_ref().map(|d| d.bond_state());
+        crate::par::for_rows_mut(
+            fam.offsets(),
+            &mut vec![(); fam.len()],
+            out,
+            &|first, block: &mut [()], out: &mut [f64]| {
+                let base = fam.offsets()[first] as usize;
+                for i in first..first + block.len() {
+                    for k in fam.range(i) {
+                        out[k - base] = if alive.is_none_or(|a| a[k] != 0) {
+                            scale * self.rest_bond_stiffness(i, k)
+                        } else {
+                            0.0
+                        };
+                    }
+                }
+            },
+        );
+    }
+
+    /// One dilatation pass and one fused force-and-energy pass (three bond loops become two).
+    fn energy_and_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) -> f64 {
+        self.check_len(y, Some(forces));
+        self.dilatation_pass(y);
+        let s = &self.setup;
+        let inp = s.inputs(y);
+        let (theta, inv, pq) = (&self.theta, &self.inv_norm, &self.pq);
+        let ids = s.disc.materials();
+        with_hgd!(s, self.damage.as_ref(), |h, g, d| {
+            map_particles2(forces, &mut self.scratch, |i| {
+                let (f, bonds) = force_and_energy(inp, h, g, d, pq, i);
+                if inv[i] == 0.0 {
+                    return (f, 0.0);
+                }
+                let dil = s.lambda[i] * s.g[ids[i] as usize].eval(theta[i]).0;
+                (f, inp.volumes[i] * (dil + s.mu[i] * inv[i] * bonds))
+            })
+        });
+        let mut energy = self.scratch.iter().sum::<f64>();
+        if let Some(guard) = &self.guard {
+            let gi = self.guard_inputs(y);
+            guard.add_forces(&gi, forces);
+            energy += guard.energy(&gi);
+        }
+        energy
+    }
+}

@@ -1,0 +1,199 @@
+//! The force model and the integrator the scene names, built into one [`Solver`].
+
+use perifrac_physics::{
+    ChenModel, Discretization, Explicit, ExplicitConfig, ForceModel, Implicit, ImplicitConfig,
+    Loads, PhysicsError, Solver, TimeStep, XuKernelShape, XuModel, XuOptions,
+};
+
+use crate::error::SceneError;
+use crate::schema::SimulationSpec;
+
+use super::check::Ctx;
+use super::defaults;
+use super::material::Materials;
+
+/// Which integrator steps the scene.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Kind {
+    /// Velocity Verlet.
+    Explicit,
+    /// Quasi-Newton.
+    Implicit,
+}
+
+/// The integrator `[simulation]` names, with its keys checked against it (no scene mesh
+/// needed, so a typo is refused before any setup work).
+pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> {
+    let kind = match sim.integrator.as_deref() {
+        None | Some("explicit") => Kind::Explicit,
+        Some("implicit") => Kind::Implicit,
+        Some(other) => {
+            return Err(ctx.err(
+                "simulation.integrator",
+                format!("\"{other}\": expected \"explicit\" or \"implicit\""),
+            ))
+        }
+    };
+    if kind == Kind::Explicit {
+        let implicit_only = [
+            ("steps_per_frame", sim.steps_per_frame.is_some()),
+            ("iterations", sim.iterations.is_some()),
+            ("tolerance", sim.tolerance.is_some()),
+            ("history", sim.history.is_some()),
+            ("refactor_share", sim.refactor_share.is_some()),
+        ];
+        if let Some((k, _)) = implicit_only.iter().find(|(_, given)| *given) {
+            return Err(ctx.err(
+                format!("simulation.{k}"),
+                "is a setting of the implicit integrator: add integrator = \"implicit\"",
+            ));
+        }
+    } else {
+        if sim.safety.is_some() {
+            return Err(ctx.err(
+                "simulation.safety",
+                "scales the explicit stable step; the implicit one has no stability limit \
+                 (set dt or steps_per_frame)",
+            ));
+        }
+        if sim.steps_per_frame == Some(0) {
+            return Err(ctx.err("simulation.steps_per_frame", "must be at least 1"));
+        }
+        if sim.iterations == Some(0) {
+            return Err(ctx.err("simulation.iterations", "must be at least 1"));
+        }
+        if let Some(t) = sim.tolerance {
+            if !(t > 0.0 && t < 1.0) {
+                return Err(ctx.err("simulation.tolerance", format!("{t} must be in (0, 1)")));
+            }
+        }
+        if let Some(r) = sim.refactor_share {
+            ctx.non_negative("simulation.refactor_share", r)?;
+        }
+    }
+    Ok(kind)
+}
+
+/// A force model of either kind, before an integrator owns it.
+pub(super) enum AnyModel {
+    /// Chen's.
+    Chen(ChenModel),
+    /// Xu's.
+    Xu(XuModel),
+}
+
+impl AnyModel {
+    /// The model as the physics crate's interface.
+    pub(super) fn as_dyn(&mut self) -> &mut dyn ForceModel {
+        match self {
+            AnyModel::Chen(m) => m,
+            AnyModel::Xu(m) => m,
+        }
+    }
+}
+
+/// The model of `materials` over `disc`, with the Xu options of `sim`.
+pub(super) fn model(
+    ctx: &Ctx,
+    sim: &SimulationSpec,
+    disc: Discretization,
+    materials: &Materials,
+) -> Result<AnyModel, SceneError> {
+    let physics = |cause: PhysicsError| ctx.physics(cause);
+    match materials {
+        Materials::Chen(m) => {
+            for (k, given) in [
+                ("influence", sim.influence.is_some()),
+                ("inversion_guard", sim.inversion_guard.is_some()),
+            ] {
+                if given {
+                    return Err(ctx.err(
+                        format!("simulation.{k}"),
+                        "is a setting of Xu's model: give the materials model = \"xu\"",
+                    ));
+                }
+            }
+            Ok(AnyModel::Chen(ChenModel::new(disc, m).map_err(physics)?))
+        }
+        Materials::Xu(m) => {
+            let kernel = match sim.influence.as_deref() {
+                None | Some("constant") => XuKernelShape::Constant,
+                Some("inverse") => XuKernelShape::Inverse,
+                Some("linear") => XuKernelShape::Linear,
+                Some(other) => {
+                    return Err(ctx.err(
+                        "simulation.influence",
+                        format!("\"{other}\": expected \"constant\", \"inverse\" or \"linear\""),
+                    ))
+                }
+            };
+            let inversion_guard = match sim.inversion_guard {
+                None => None,
+                Some(f) => Some(ctx.positive("simulation.inversion_guard", f, "")?),
+            };
+            let options = XuOptions {
+                kernel,
+                inversion_guard,
+            };
+            Ok(AnyModel::Xu(
+                XuModel::new(disc, m, options).map_err(physics)?,
+            ))
+        }
+    }
+}
+
+/// Where a solver starts: at rest at `rest` (m), with `loads`, stepping `dt` (s); `horizon`
+/// (m) scales the explicit blow-up guard.
+pub(super) struct Start<'a> {
+    pub rest: &'a [[f64; 3]],
+    pub horizon: f64,
+    pub loads: Loads,
+    pub dt: f64,
+}
+
+/// The solver: `model` stepped by `kind` from `start`.
+pub(super) fn build(
+    ctx: &Ctx,
+    sim: &SimulationSpec,
+    kind: Kind,
+    model: AnyModel,
+    start: Start,
+) -> Result<Box<dyn Solver>, SceneError> {
+    let Start {
+        rest,
+        horizon,
+        loads,
+        dt,
+    } = start;
+    let physics = |cause: PhysicsError| ctx.physics(cause);
+    let explicit = ExplicitConfig {
+        dt: TimeStep::Fixed(dt),
+        guard_fraction: defaults::GUARD_FRACTION,
+    };
+    Ok(match (kind, model) {
+        (Kind::Explicit, AnyModel::Chen(m)) => {
+            Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
+        }
+        (Kind::Explicit, AnyModel::Xu(m)) => {
+            Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
+        }
+        (Kind::Implicit, AnyModel::Xu(m)) => {
+            let base = ImplicitConfig::with_dt(dt);
+            let config = ImplicitConfig {
+                max_iterations: sim.iterations.unwrap_or(base.max_iterations),
+                tolerance: sim.tolerance.unwrap_or(base.tolerance),
+                history: sim.history.unwrap_or(base.history),
+                refactor_share: sim.refactor_share.unwrap_or(base.refactor_share),
+                ..base
+            };
+            Box::new(Implicit::new(m, rest, loads, config).map_err(physics)?)
+        }
+        (Kind::Implicit, AnyModel::Chen(_)) => {
+            return Err(ctx.err(
+                "simulation.integrator",
+                "\"implicit\" needs an energy with a rest stiffness: give the materials \
+                 model = \"xu\" (Chen's elastoplastic model steps explicitly)",
+            ))
+        }
+    })
+}
