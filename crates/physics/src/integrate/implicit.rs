@@ -402,18 +402,25 @@ enum Which {
 }
 
 /// An estimate of how much `Phi` can still fall in this step (J): the quadratic model's
-/// prediction `predicted` for the next direction, or, when the last two decreases `prev`,
-/// `last` shrink geometrically at a rate `r = last / prev`, the tail `last r / (1 - r)` of that
-/// series if larger. The prediction alone underestimates the remaining decrease by `1 - r`
+/// prediction `predicted` for the next direction, or, when the last decreases shrink at a rate
+/// `r` (the geometric mean of the ratios over the last three, `(d_k / d_(k-3))^(1/3)`, at most
+/// 0.99), the tail `d_k r / (1 - r)` of that series if larger; when they do not shrink, the
+/// last decrease itself. The prediction alone underestimates the remaining decrease by `1 - r`
 /// when the iteration converges slowly (bending a long bar with a matrix that resists
-/// rotation), and would stop it early.
-fn remaining_decrease(predicted: f64, prev: f64, last: f64) -> f64 {
-    let rate = last / prev;
-    if !(rate.is_finite() && rate > 0.0) {
+/// rotation), and would stop it early; one ratio alone is too noisy for L-BFGS's uneven steps.
+fn remaining_decrease(predicted: f64, decreases: &[f64; 4]) -> f64 {
+    let [older, _, _, last] = *decreases;
+    let rate = (last / older).cbrt();
+    if !rate.is_finite() || rate <= 0.0 {
         return predicted;
     }
-    let rate = rate.min(0.999);
-    predicted.max(last * rate / (1.0 - rate))
+    let tail = if rate < 1.0 {
+        let r = rate.min(0.99);
+        last * r / (1.0 - r)
+    } else {
+        last
+    };
+    predicted.max(tail)
 }
 
 /// Line-search halvings before a step is declared stalled.
@@ -516,8 +523,8 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
         let (mut count, mut head) = (0usize, 0usize);
         let mut iterations = 0;
         let mut capped = true;
-        // the last two decreases of Phi, for the rate of convergence
-        let (mut dec_prev, mut dec_last) = (f64::NAN, f64::NAN);
+        // the last four decreases of Phi, oldest first, for the rate of convergence
+        let mut decreases = [f64::NAN; 4];
         while iterations < self.config.max_iterations {
             self.direction(count, head);
             let mut slope = self.g.dot(&self.d);
@@ -528,7 +535,7 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
                 slope = self.g.dot(&self.d);
             }
             let predicted = -0.5 * slope;
-            let remaining = remaining_decrease(predicted, dec_prev, dec_last);
+            let remaining = remaining_decrease(predicted, &decreases);
             if remaining <= self.config.tolerance * (phi_start - phi + remaining) {
                 capped = false;
                 break;
@@ -581,7 +588,8 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
             }
             std::mem::swap(&mut self.x, &mut self.trial);
             std::mem::swap(&mut self.g, &mut self.g_trial);
-            (dec_prev, dec_last) = (dec_last, phi - value);
+            decreases.rotate_left(1);
+            decreases[3] = phi - value;
             phi = value;
             self.trace.push(phi);
         }
