@@ -174,11 +174,6 @@ impl Loads {
         }
     }
 
-    /// True when some particle is anchored.
-    pub fn any_anchored(&self) -> bool {
-        self.anchor_of.iter().any(|&a| a != FREE)
-    }
-
     /// True when some anchor motion (released or not) rotates: the integrators then take the
     /// path that moves anchored particles along exact circles.
     pub fn has_rotation(&self) -> bool {
@@ -230,8 +225,8 @@ mod tests {
         };
         assert!(loads.anchor_motion(&[0], bad).is_err());
         assert!(loads.anchor(&[3], [0.0; 3]).is_err());
-        assert!(!loads.any_anchored());
+        assert!((0..3).all(|i| loads.motion(i).is_none()));
         loads.anchor(&[1], [0.0; 3]).unwrap();
-        assert!(loads.any_anchored() && !loads.has_rotation());
+        assert!(loads.motion(1).is_some() && !loads.has_rotation());
     }
 }

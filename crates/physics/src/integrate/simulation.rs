@@ -143,11 +143,6 @@ impl<M: ForceModel, I: Integrator<M>> Simulation<M, I> {
         &mut self.model
     }
 
-    /// The integrator.
-    pub fn integrator(&self) -> &I {
-        &self.integrator
-    }
-
     /// Kinetic energy (J).
     pub fn kinetic_energy(&self) -> f64 {
         energy::kinetic_energy(self.model.masses(), &self.state.velocities)

@@ -244,19 +244,6 @@ impl XuModel {
         &self.theta
     }
 
-    /// Normalised weight `w_ij` (1/m^3) of directed bond `k` of particle `i`.
-    pub fn weight(&self, i: usize, k: usize) -> f64 {
-        self.setup.wr[k] * self.setup.disc.family().rest_lengths()[k] * self.inv_norm[i]
-    }
-
-    /// `(G_ij, G_ji)` of directed bond `k`.
-    pub fn kernel(&self, k: usize) -> (f64, f64) {
-        self.setup
-            .kernel
-            .as_ref()
-            .map_or((1.0, 1.0), |(a, b)| (a[k], b[k]))
-    }
-
     /// Recomputes `1 / sum_j wt_ij V_j` over intact bonds, for the particles in `touched` (all
     /// when `None`), so `sum_j w_ij V_j = 1` stays true as bonds break and a broken body at rest
     /// feels no force.
