@@ -96,6 +96,17 @@ impl Discretization {
         }
     }
 
+    /// Panics unless `y` (and `forces`, when given) hold one entry per particle: a caller's
+    /// programming error, checked once at a model's entry.
+    #[track_caller]
+    pub(crate) fn check_slices(&self, y: &[Vec3], forces: Option<&[Vec3]>) {
+        let n = self.len();
+        assert_eq!(y.len(), n, "positions: one per particle");
+        if let Some(f) = forces {
+            assert_eq!(f.len(), n, "forces: one per particle");
+        }
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.volumes.len()

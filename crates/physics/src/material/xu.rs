@@ -351,11 +351,7 @@ impl XuModel {
 
     #[track_caller]
     fn check_len(&self, y: &[Vec3], forces: Option<&[Vec3]>) {
-        let n = self.setup.disc.len();
-        assert_eq!(y.len(), n, "positions: one per particle");
-        if let Some(f) = forces {
-            assert_eq!(f.len(), n, "forces: one per particle");
-        }
+        self.setup.disc.check_slices(y, forces);
     }
 }
 
