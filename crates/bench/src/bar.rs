@@ -1,8 +1,10 @@
-//! Peridynamic bars on Kuhn-lattice boxes, shared by the accuracy cases: building the model,
-//! picking particles, fitting.
+//! Peridynamic bars on Kuhn-lattice boxes, shared by the accuracy cases: building the model
+//! (Chen's or Xu's, through [`PdMaterial`]), picking particles, fitting.
 
 use perifrac_physics::{
-    ChenMaterial, ChenModel, Discretization, Explicit, ExplicitConfig, Loads, TimeStep, Vec3,
+    ChenMaterial, ChenModel, Curve, Discretization, Explicit, ExplicitConfig, ForceModel, Implicit,
+    ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel, Simulation, TimeStep, Vec3,
+    XuMaterial, XuModel, XuModuli, XuOptions,
 };
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
@@ -15,11 +17,59 @@ use crate::error::BenchError;
 /// slab).
 pub(crate) const KUHN_EDGE_PER_CELL: f64 = 1.3;
 
+/// A material the harness can build a force model of: Chen's ([`ChenMaterial`]) or Xu's
+/// ([`XuMaterial`], with the default options: constant influence, no inversion guard).
+pub(crate) trait PdMaterial {
+    /// The model this material makes.
+    type Model: ForceModel;
+
+    /// The model of this one material over `disc`.
+    fn model(&self, disc: Discretization) -> Result<Self::Model, PhysicsError>;
+}
+
+impl PdMaterial for ChenMaterial {
+    type Model = ChenModel;
+
+    fn model(&self, disc: Discretization) -> Result<ChenModel, PhysicsError> {
+        ChenModel::new(disc, std::slice::from_ref(self))
+    }
+}
+
+/// Xu's neo-Hookean-like material (`g = h = A1`) with Young's modulus `young` (Pa), Poisson's
+/// ratio `poisson` and density (kg/m^3), by the consistent conversion of the moduli.
+pub(crate) fn xu_neo_hookean(
+    case: &str,
+    young: f64,
+    poisson: f64,
+    density: f64,
+) -> Result<XuMaterial, BenchError> {
+    XuMaterial::from_young_poisson(
+        young,
+        poisson,
+        density,
+        Curve::NeoHookean,
+        Curve::NeoHookean,
+        XuModuli::Consistent,
+    )
+    .map_err(|cause| BenchError::Physics {
+        case: case.into(),
+        cause,
+    })
+}
+
+impl PdMaterial for XuMaterial {
+    type Model = XuModel;
+
+    fn model(&self, disc: Discretization) -> Result<XuModel, PhysicsError> {
+        XuModel::new(disc, std::slice::from_ref(self), XuOptions::default())
+    }
+}
+
 /// A peridynamic body ready to integrate; its rest positions, horizon and bonds are the
 /// model's.
-pub(crate) struct Body {
+pub(crate) struct Body<M = ChenModel> {
     /// The model.
-    pub model: ChenModel,
+    pub model: M,
 }
 
 /// `v, t` as a tet mesh, its refusal as a [`BenchError::Mesh`] of `case`.
@@ -33,12 +83,12 @@ pub(crate) fn tet_mesh(case: &str, v: Vec<Vec3>, t: Vec<[u32; 4]>) -> Result<Tet
 
 /// `mesh` as a peridynamic body of `material`, one particle per tet, with horizon `k` times
 /// the mesh's mean edge length.
-pub(crate) fn mesh_body(
+pub(crate) fn mesh_body<T: PdMaterial>(
     case: &str,
     mesh: &TetMesh,
     k: f64,
-    material: &ChenMaterial,
-) -> Result<Body, BenchError> {
+    material: &T,
+) -> Result<Body<T::Model>, BenchError> {
     let physics = |cause| BenchError::Physics {
         case: case.into(),
         cause,
@@ -48,20 +98,20 @@ pub(crate) fn mesh_body(
     let (disc, _) =
         Discretization::from_tets(&rest, &mesh.rest_volumes(), mesh.neighbours(), horizon)
             .map_err(physics)?;
-    let model = ChenModel::new(disc, std::slice::from_ref(material)).map_err(physics)?;
+    let model = material.model(disc).map_err(physics)?;
     Ok(Body { model })
 }
 
 /// The box `[min, max]` in `cells` Kuhn cells as a peridynamic body of `material` with
 /// horizon `k` times the mesh's mean edge length.
-pub(crate) fn body(
+pub(crate) fn body<T: PdMaterial>(
     case: &str,
     min: Vec3,
     max: Vec3,
     cells: [usize; 3],
     k: f64,
-    material: &ChenMaterial,
-) -> Result<Body, BenchError> {
+    material: &T,
+) -> Result<Body<T::Model>, BenchError> {
     let (v, t) = box_data(min, max, cells);
     mesh_body(case, &tet_mesh(case, v, t)?, k, material)
 }
@@ -75,41 +125,74 @@ pub(crate) fn cells_across(nx: usize) -> usize {
 /// cells along and [`cells_across`] across, plus a clamp layer of whole cells at least one
 /// horizon (`k` mean edges) thick behind x = 0. Returns the body and the clamp layer's
 /// particles.
-pub(crate) fn clamped_bar(
+pub(crate) fn clamped_bar<T: PdMaterial>(
     case: &str,
     length: f64,
     side: f64,
     nx: usize,
     k: f64,
-    material: &ChenMaterial,
-) -> Result<(Body, Vec<u32>), BenchError> {
+    material: &T,
+) -> Result<(Body<T::Model>, Vec<u32>), BenchError> {
+    let b = held_bar(case, length, side, nx, k, material, false)?;
+    Ok((b.body, b.clamp))
+}
+
+/// A bar held at its ends: the body, the clamp layer behind x = 0 and, when asked for, a
+/// layer of the same depth beyond x = `length` (the end a motion turns).
+pub(crate) struct HeldBar<M> {
+    /// The body, layers included.
+    pub body: Body<M>,
+    /// Particles of the layer behind x = 0 (rest x < 0).
+    pub clamp: Vec<u32>,
+    /// Particles of the layer beyond the far end (rest x > `length`); empty without one.
+    pub end: Vec<u32>,
+}
+
+/// [`clamped_bar`], with a second layer of the clamp's depth beyond x = `length` when
+/// `end_layer`: the bar proper, 0 < x < `length`, then has a layer one horizon thick at each
+/// end to hold or move, as a finite-element bar's end faces are.
+pub(crate) fn held_bar<T: PdMaterial>(
+    case: &str,
+    length: f64,
+    side: f64,
+    nx: usize,
+    k: f64,
+    material: &T,
+    end_layer: bool,
+) -> Result<HeldBar<T::Model>, BenchError> {
     let n = cells_across(nx);
     let h = length / nx as f64;
     let clamp = (k * KUHN_EDGE_PER_CELL).ceil() as usize;
-    let b = body(
+    let far = if end_layer { clamp } else { 0 };
+    let body = body(
         case,
         [-(clamp as f64) * h, -side / 2.0, -side / 2.0],
-        [length, side / 2.0, side / 2.0],
-        [nx + clamp, n, n],
+        [length + far as f64 * h, side / 2.0, side / 2.0],
+        [nx + clamp + far, n, n],
         k,
         material,
     )?;
-    let held = b.select(|x| x[0] < 0.0);
-    Ok((b, held))
+    let clamp = body.select(|x| x[0] < 0.0);
+    let end = if end_layer {
+        body.select(|x| x[0] > length)
+    } else {
+        Vec::new()
+    };
+    Ok(HeldBar { body, clamp, end })
 }
 
 /// A box `[0, size]` of `cells` cells: [`body`] for the cases that start at the origin.
-pub(crate) fn block(
+pub(crate) fn block<T: PdMaterial>(
     case: &str,
     size: Vec3,
     cells: [usize; 3],
     k: f64,
-    material: &ChenMaterial,
-) -> Result<Body, BenchError> {
+    material: &T,
+) -> Result<Body<T::Model>, BenchError> {
     body(case, [0.0; 3], size, cells, k, material)
 }
 
-impl Body {
+impl<M: ForceModel> Body<M> {
     /// Rest positions of the particles (m).
     pub fn rest(&self) -> &[Vec3] {
         self.model.discretization().rest_positions()
@@ -126,7 +209,7 @@ impl Body {
     }
 
     /// An explicit solver at 0.8 of the estimated stable step.
-    pub fn solver(self, case: &str, loads: Loads) -> Result<Explicit<ChenModel>, BenchError> {
+    pub fn solver(self, case: &str, loads: Loads) -> Result<Explicit<M>, BenchError> {
         self.solver_at(case, loads, TimeStep::Auto { safety: 0.8 })
     }
 
@@ -136,7 +219,7 @@ impl Body {
         case: &str,
         loads: Loads,
         dt: TimeStep,
-    ) -> Result<Explicit<ChenModel>, BenchError> {
+    ) -> Result<Explicit<M>, BenchError> {
         let config = ExplicitConfig {
             dt,
             guard_fraction: 0.5,
@@ -151,6 +234,23 @@ impl Body {
         })
     }
 
+    /// An implicit solver with `config`.
+    pub fn implicit(
+        self,
+        case: &str,
+        loads: Loads,
+        config: ImplicitConfig,
+    ) -> Result<Implicit<M>, BenchError>
+    where
+        M: QuasiNewtonModel,
+    {
+        let rest = self.rest().to_vec();
+        Implicit::new(self.model, &rest, loads, config).map_err(|cause| BenchError::Physics {
+            case: case.into(),
+            cause,
+        })
+    }
+
     /// Indices of the particles whose rest position passes `select`.
     pub fn select(&self, select: impl Fn(Vec3) -> bool) -> Vec<u32> {
         let rest = self.rest();
@@ -161,12 +261,15 @@ impl Body {
 }
 
 /// Rest positions of the particles of `s` (m).
-pub(crate) fn rest_of(s: &Explicit<ChenModel>) -> &[Vec3] {
+pub(crate) fn rest_of<M: ForceModel, I: Integrator<M>>(s: &Simulation<M, I>) -> &[Vec3] {
     s.model().discretization().rest_positions()
 }
 
-/// Sets the velocity of every particle of `s` to `velocity` at its rest position.
-pub(crate) fn set_velocities(s: &mut Explicit<ChenModel>, velocity: impl Fn(Vec3) -> Vec3) {
+/// Sets the velocity (m/s) of every particle of `s` to `velocity` at its rest position.
+pub(crate) fn set_velocities<M: ForceModel, I: Integrator<M>>(
+    s: &mut Simulation<M, I>,
+    velocity: impl Fn(Vec3) -> Vec3,
+) {
     let v: Vec<Vec3> = rest_of(s).iter().map(|&x| velocity(x)).collect();
     s.velocities_mut().copy_from_slice(&v);
 }

@@ -39,6 +39,9 @@ pub enum BenchError {
         /// What went wrong.
         message: String,
     },
+    /// An accuracy case name that is none of `accuracy::CASES`.
+    #[error("unknown accuracy case {0:?}; the cases are {cases}", cases = crate::accuracy::CASES.join(", "))]
+    UnknownCase(String),
     /// A thread pool could not be built.
     #[error("a one-thread pool: {message}")]
     Threads {

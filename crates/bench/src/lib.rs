@@ -12,6 +12,7 @@
 pub mod accuracy;
 mod bar;
 mod error;
+mod fit;
 mod plot;
 pub mod speed;
 pub mod stability;

@@ -1,7 +1,8 @@
 //! `perifrac bench speed`: how fast the particles go. The bond-update rate of each material
 //! path on one core and on all of them, seconds per step at the size of the paper's glass
 //! wall, the share of a step the topology takes while a slab shatters, and memory per bond.
-//! Timings are wall clock on whatever machine runs it; the report says which.
+//! Timings are wall clock on whatever machine runs it; the report says which. [`implicit_step`]
+//! times Xu's model under the implicit step.
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -14,6 +15,10 @@ use perifrac_scene::{Scene, Setup};
 use crate::bar;
 use crate::table::Table;
 use crate::{BenchError, Effort};
+
+mod implicit;
+
+pub use implicit::implicit_step;
 
 /// A material path of the Chen model.
 #[derive(Debug, Clone, Copy)]

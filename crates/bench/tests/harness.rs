@@ -1,7 +1,9 @@
 //! The harness itself on its tiny cases: every accuracy row has a finite error, refining the
-//! cantilever does not make it worse, no stability case ends in a NaN or a panic, and the
-//! speed tables hold positive rates. (The measurements are in BENCHMARKS.md, made with the
-//! full cases; timings are never asserted.)
+//! cantilever does not make it worse, the motion cases carry every method (Chen and Xu
+//! explicit, Xu implicit at 1, 4 and 16 steps per frame) and Xu's static cases their implicit
+//! runs, no stability case ends in a NaN or a panic, and the speed tables hold positive rates.
+//! (The measurements are in BENCHMARKS.md, made with the full cases; timings are never
+//! asserted.)
 
 use perifrac_bench::stability::Outcome;
 use perifrac_bench::{accuracy, speed, stability, Effort};
@@ -22,6 +24,52 @@ fn accuracy_rows_are_finite_and_refinement_helps_the_cantilever() {
         }
         assert_eq!(r.table.rows.len(), r.runs.len());
         assert!(r.table.to_markdown().contains(&r.runs[0].resolution));
+    }
+    let by_name = |n: &str| reports.iter().find(|r| r.name == n).unwrap();
+    for name in ["swing", "twist"] {
+        let r = by_name(name);
+        let methods: Vec<&str> = r.runs.iter().map(|run| run.method.as_str()).collect();
+        assert_eq!(
+            methods,
+            [
+                "PD Chen explicit",
+                "PD Xu explicit",
+                "PD Xu implicit 1/frame",
+                "PD Xu implicit 4/frame",
+                "PD Xu implicit 16/frame"
+            ],
+            "{name}"
+        );
+        // 1, 4 and 16 steps per 1/24 s frame over 0.6 s and 0.3 s, rounded to whole steps
+        let steps: Vec<u64> = r.runs[2..].iter().map(|run| run.steps).collect();
+        let want: [u64; 3] = if name == "swing" {
+            [14, 58, 230]
+        } else {
+            [7, 29, 115]
+        };
+        assert_eq!(steps, want, "{name}");
+        for run in &r.runs[2..] {
+            let st = run
+                .implicit
+                .expect("implicit rows carry the solver's counters");
+            assert!(
+                st.iterations > 0 && st.evaluations >= st.iterations,
+                "{run:?}"
+            );
+        }
+        assert!(r.runs[..2].iter().all(|run| run.implicit.is_none()));
+        // the speed-against-error table has every run of its resolution
+        let (_, speed) = &r.tables[0];
+        assert_eq!(speed.rows.len(), r.runs.len(), "{name}");
+    }
+    for name in ["xu_bend", "xu_twist"] {
+        let r = by_name(name);
+        assert_eq!(r.runs.len(), 1, "{name}");
+        let st = r.runs[0].implicit.expect("an implicit run");
+        assert!(st.iterations > 0, "{name}: {st:?}");
+        // the error is a deviation, positive; the reading table has one row per run
+        assert!(r.runs[0].error > 0.0, "{name}");
+        assert_eq!(r.tables[0].1.rows.len(), 1, "{name}");
     }
     let cantilever = &reports[0];
     let pd: Vec<_> = cantilever
@@ -90,6 +138,17 @@ fn speed_tables_hold_positive_rates() {
     let share = speed::fracture_share(Effort::Tiny, &mut |_| {}).unwrap();
     let broken: u64 = share.rows[0][2].parse().unwrap();
     assert!(broken > 0, "the slab did not break: {:?}", share.rows[0]);
+    // the implicit step: one row on one thread and one on the pool, each with iterations,
+    // evaluations (at least one per iteration) and a factor in memory
+    let implicit = speed::implicit_step(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(implicit.rows.len(), 2);
+    for row in &implicit.rows {
+        let iterations: f64 = row[5].parse().unwrap();
+        let evaluations: f64 = row[6].parse().unwrap();
+        let factor_mb: f64 = row[11].parse().unwrap();
+        assert!(iterations > 0.0 && evaluations >= iterations, "{row:?}");
+        assert!(factor_mb > 0.0, "{row:?}");
+    }
 }
 
 #[test]

@@ -24,14 +24,15 @@ pub enum Which {
         /// Output and effort.
         #[command(flatten)]
         common: Common,
-        /// Only these cases (cantilever, swing, twist, moduli, wave_speed); default all.
+        /// Only these cases (cantilever, swing, twist, moduli, wave_speed, xu_bend, xu_twist);
+        /// default all.
         #[arg(long, value_delimiter = ',')]
         case: Vec<String>,
     },
     /// Hard cases: each survives, stops with a message, or is reported as a failure.
     Stability(Common),
     /// Bond-update rates per material path, seconds per step at the paper's wall size, the
-    /// topology's share of a step during heavy fracture, memory per bond.
+    /// topology's share of a step during heavy fracture, memory per bond, the implicit step.
     Speed(Common),
 }
 
@@ -71,29 +72,51 @@ fn accuracy_report(c: &Common, only: &[String]) -> Result<()> {
         );
     }
     let report = Report::start(c)?;
-    let cases = accuracy::run_all(effort(c), only, &mut report.progress())?;
-    let mut md = report.header("accuracy");
-    for case in &cases {
-        let png = format!("accuracy_{}.png", case.name);
-        let plotted = match case.plot.write_png(&c.output.join(&png)) {
-            Ok(()) => true,
-            Err(e) => {
-                eprintln!("note: {e}; the table is written without its plot");
-                false
-            }
-        };
-        md.push_str(&format!("## {}\n\n{}\n\n", case.title, case.text));
-        md.push_str(&case.table.to_markdown());
-        if plotted {
+    let mut progress = report.progress();
+    let names = accuracy::selected(only);
+    // the report is rewritten after every case, so an interrupted run keeps what it finished
+    let mut sections = String::new();
+    for (done, name) in names.iter().enumerate() {
+        let case = accuracy::run_case(name, effort(c), &mut progress)?;
+        sections.push_str(&case_section(c, &case));
+        let mut md = report.header("accuracy");
+        if done + 1 < names.len() {
             md.push_str(&format!(
-                "\n![{}: error against wall time]({png})\n",
-                case.title
+                "(Still running: {}.)\n\n",
+                names[done + 1..].join(", ")
             ));
         }
-        md.push('\n');
+        md.push_str(&sections);
+        report.write("accuracy", &md)?;
     }
-    report.write("accuracy", &md)?;
     Ok(())
+}
+
+/// One accuracy case's section of the report: its text, table, plot (written beside the
+/// report) and further tables.
+fn case_section(c: &Common, case: &accuracy::CaseReport) -> String {
+    let png = format!("accuracy_{}.png", case.name);
+    let plotted = match case.plot.write_png(&c.output.join(&png)) {
+        Ok(()) => true,
+        Err(e) => {
+            eprintln!("note: {e}; the table is written without its plot");
+            false
+        }
+    };
+    let mut md = format!("## {}\n\n{}\n\n", case.title, case.text);
+    md.push_str(&case.table.to_markdown());
+    if plotted {
+        md.push_str(&format!(
+            "\n![{}: error against wall time]({png})\n",
+            case.title
+        ));
+    }
+    for (heading, table) in &case.tables {
+        md.push_str(&format!("\n### {heading}\n\n"));
+        md.push_str(&table.to_markdown());
+    }
+    md.push('\n');
+    md
 }
 
 fn stability_report(c: &Common) -> Result<()> {
@@ -121,6 +144,7 @@ fn speed_report(c: &Common) -> Result<()> {
     let paths = speed::paths(e, &mut progress)?;
     let wall = speed::glass_wall(e, &mut progress)?;
     let share = speed::fracture_share(e, &mut progress)?;
+    let implicit = speed::implicit_step(e, &mut progress)?;
     let mut md = report.header("speed");
     md.push_str("## Bond-update rate per material path\n\n");
     md.push_str(&paths.to_markdown());
@@ -128,6 +152,8 @@ fn speed_report(c: &Common) -> Result<()> {
     md.push_str(&wall.to_markdown());
     md.push_str("\n## Where a step goes while a slab shatters\n\n");
     md.push_str(&share.to_markdown());
+    md.push_str("\n## The implicit step (Xu's model, one step per 1/24 s frame)\n\n");
+    md.push_str(&implicit.to_markdown());
     report.write("speed", &md)?;
     Ok(())
 }

@@ -104,6 +104,7 @@ fn finite_elements(nx: usize, quadratic: bool) -> Result<Run, BenchError> {
         size: 3 * problem.mesh().node_count(),
         value: -u[2],
         error: 0.0,
+        implicit: None,
     })
 }
 
@@ -184,5 +185,6 @@ pub fn cantilever(
         table,
         plot,
         runs,
+        tables: Vec::new(),
     })
 }

@@ -4,12 +4,15 @@
 
 mod cantilever;
 mod motion;
+mod motion_runs;
 mod waves;
+mod xu;
+mod xu_static;
 
 use std::time::Instant;
 
 use perifrac_fem::{FemError, Material, Mesh, Problem};
-use perifrac_physics::{ChenMaterial, Vec3};
+use perifrac_physics::{ChenMaterial, SolverStats, Vec3};
 use perifrac_topology::primitives::bar_data;
 
 use crate::plot::{Plot, Series};
@@ -19,6 +22,7 @@ use crate::{BenchError, Effort};
 pub use cantilever::{cantilever, EULER_BERNOULLI, SCIKIT_FEM, TIMOSHENKO};
 pub use motion::{swing, twist};
 pub use waves::{moduli, wave_speed};
+pub use xu::{xu_bend, xu_twist};
 
 /// The horizon factors every peridynamic sweep runs (the 1.0, 1.5, 2.0).
 pub const HORIZON_FACTORS: [f64; 3] = [1.0, 1.5, 2.0];
@@ -82,6 +86,9 @@ pub struct Run {
     pub value: f64,
     /// Relative error against the case's reference.
     pub error: f64,
+    /// The implicit integrator's counters (iterations, evaluations, capped steps, ...) for an
+    /// implicit run; `None` otherwise.
+    pub implicit: Option<SolverStats>,
 }
 
 impl Run {
@@ -97,6 +104,7 @@ impl Run {
             size: bonds,
             value: 0.0,
             error: 0.0,
+            implicit: None,
         }
     }
 }
@@ -116,10 +124,20 @@ pub struct CaseReport {
     pub plot: Plot,
     /// The runs.
     pub runs: Vec<Run>,
+    /// Further tables, each under its heading (speed against error, positions read off).
+    pub tables: Vec<(String, Table)>,
 }
 
 /// The accuracy cases by name, in report order.
-pub const CASES: [&str; 5] = ["cantilever", "swing", "twist", "moduli", "wave_speed"];
+pub const CASES: [&str; 7] = [
+    "cantilever",
+    "swing",
+    "twist",
+    "moduli",
+    "wave_speed",
+    "xu_bend",
+    "xu_twist",
+];
 
 /// Runs the accuracy cases at `effort` (those named in `only`, or all), telling `progress`
 /// what starts.
@@ -128,20 +146,36 @@ pub fn run_all(
     only: &[String],
     progress: &mut dyn FnMut(&str),
 ) -> Result<Vec<CaseReport>, BenchError> {
-    let mut out = Vec::new();
-    for name in CASES {
-        if !only.is_empty() && !only.iter().any(|o| o == name) {
-            continue;
-        }
-        out.push(match name {
-            "cantilever" => cantilever(effort, progress)?,
-            "swing" => swing(effort, progress)?,
-            "twist" => twist(effort, progress)?,
-            "moduli" => moduli(effort, progress)?,
-            _ => wave_speed(effort, progress)?,
-        });
+    selected(only)
+        .into_iter()
+        .map(|name| run_case(name, effort, progress))
+        .collect()
+}
+
+/// The names of [`CASES`] in `only` (all of them when it is empty), in report order.
+pub fn selected(only: &[String]) -> Vec<&'static str> {
+    CASES
+        .into_iter()
+        .filter(|name| only.is_empty() || only.iter().any(|o| o == name))
+        .collect()
+}
+
+/// Runs the accuracy case `name` (one of [`CASES`]) at `effort`.
+pub fn run_case(
+    name: &str,
+    effort: Effort,
+    progress: &mut dyn FnMut(&str),
+) -> Result<CaseReport, BenchError> {
+    match name {
+        "cantilever" => cantilever(effort, progress),
+        "swing" => swing(effort, progress),
+        "twist" => twist(effort, progress),
+        "moduli" => moduli(effort, progress),
+        "wave_speed" => wave_speed(effort, progress),
+        "xu_bend" => xu_bend(effort, progress),
+        "xu_twist" => xu_twist(effort, progress),
+        other => Err(BenchError::UnknownCase(other.into())),
     }
-    Ok(out)
 }
 
 /// The table and plot of `runs`: one row each; one curve per method (and horizon factor).

@@ -9,26 +9,49 @@
 //! growing linearly from the clamp to 40 rad/s at the free end, and twists about a radian and
 //! back. The reference is quadratic tets with corotated kinematics, integrated explicitly; its
 //! error is bounded by running it on a mesh half as fine and, there, with half the step.
+//!
+//! Chen's model (the paper's) runs over the resolution and horizon sweep; Xu's runs beside it
+//! on two resolutions at k = 1.5, explicitly and implicitly at 1, 4 and 16 steps per frame
+//! ([`super::motion_runs`]), and a second table sets their wall times against their errors.
 
 use std::time::Instant;
 
 use perifrac_fem::{critical_time_step, Dynamic, Kinematics, Problem, Sampler};
-use perifrac_physics::{ChenMaterial, Loads, Vec3};
+use perifrac_physics::{ChenMaterial, Vec3};
 
+use super::motion_runs::{implicit_steps, Method};
 use super::{
     clamped_fem_bar, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH, SIDE,
 };
-use crate::bar::{cells_across, clamped_bar, rest_of, set_velocities};
+use crate::bar::cells_across;
+use crate::table::Table;
 use crate::{BenchError, Effort};
+
+/// Steps per 1/24 s frame of the implicit runs.
+const PER_FRAME: [u32; 3] = [1, 4, 16];
+/// The runs of Xu's model, explicit and implicit.
+const XU_METHODS: [Method; 4] = [
+    Method::XuExplicit,
+    Method::XuImplicit(PER_FRAME[0]),
+    Method::XuImplicit(PER_FRAME[1]),
+    Method::XuImplicit(PER_FRAME[2]),
+];
+/// Cells along of Xu's runs and of the speed-against-error table.
+const XU_LEVELS: [usize; 2] = [30, 60];
+/// Horizon factor of Xu's runs.
+const XU_FACTOR: f64 = 1.5;
+
 /// Diagonal of the bar's bounding box (m): the paper's length scale for the deviation.
-fn diagonal() -> f64 {
+pub(super) fn diagonal() -> f64 {
     (LENGTH * LENGTH + 2.0 * SIDE * SIDE).sqrt()
 }
 
 /// Which motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Motion {
+pub(super) enum Motion {
+    /// Figure 11.
     Swing,
+    /// Figure 12.
     Twist,
 }
 
@@ -42,18 +65,19 @@ impl Motion {
     }
 
     /// The material of Table 1.
-    fn material(self) -> ChenMaterial {
+    pub(super) fn material(self) -> ChenMaterial {
         let (kappa, mu) = self.moduli();
         ChenMaterial::elastic(kappa, mu, DENSITY)
     }
 
     /// Young's modulus (Pa) and Poisson's ratio of [`Motion::material`].
-    fn young_poisson(self) -> (f64, f64) {
+    pub(super) fn young_poisson(self) -> (f64, f64) {
         let m = self.material();
         (m.young(), m.poisson())
     }
 
-    fn gravity(self) -> Vec3 {
+    /// Gravity (m/s^2).
+    pub(super) fn gravity(self) -> Vec3 {
         match self {
             Motion::Swing => [0.0, 0.0, -9.81],
             Motion::Twist => [0.0; 3],
@@ -61,7 +85,7 @@ impl Motion {
     }
 
     /// Simulated time (s): about one swing period, two twist periods.
-    fn duration(self) -> f64 {
+    pub(super) fn duration(self) -> f64 {
         match self {
             Motion::Swing => 0.6,
             Motion::Twist => 0.3,
@@ -69,7 +93,7 @@ impl Motion {
     }
 
     /// Initial velocity at rest position `x` (m/s).
-    fn velocity(self, x: Vec3) -> Vec3 {
+    pub(super) fn velocity(self, x: Vec3) -> Vec3 {
         match self {
             Motion::Swing => [0.0; 3],
             Motion::Twist => {
@@ -79,7 +103,8 @@ impl Motion {
         }
     }
 
-    fn name(self) -> &'static str {
+    /// Name for progress lines and errors.
+    pub(super) fn name(self) -> &'static str {
         match self {
             Motion::Swing => "swinging bar",
             Motion::Twist => "twisting bar",
@@ -88,10 +113,10 @@ impl Motion {
 }
 
 /// Sample times (evenly spaced over the duration) at which positions are compared.
-const SAMPLES: usize = 30;
+pub(super) const SAMPLES: usize = 30;
 
 /// A trajectory: positions of the compared points at each sample time.
-type Trajectory = Vec<Vec<Vec3>>;
+pub(super) type Trajectory = Vec<Vec<Vec3>>;
 
 /// The corotated P2 reference: its problem and the nodal displacements at each sample time.
 struct Reference {
@@ -165,57 +190,20 @@ impl Reference {
 
 /// Largest distance between two trajectories over points and samples, over the diagonal.
 fn deviation(a: &Trajectory, b: &Trajectory) -> f64 {
-    let mut worst: f64 = 0.0;
-    for (pa, pb) in a.iter().zip(b) {
-        for (x, y) in pa.iter().zip(pb) {
-            let d = ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt();
-            worst = worst.max(d);
-        }
-    }
-    worst / diagonal()
+    a.iter()
+        .zip(b)
+        .map(|(pa, pb)| deviation_at(pa, pb))
+        .fold(0.0, f64::max)
 }
 
-/// Peridynamics on `nx` cells along with horizon factor `k`: the run and its trajectory at
-/// its own particles (those in the bar proper, x > 0).
-fn peridynamics(
-    motion: Motion,
-    nx: usize,
-    k: f64,
-) -> Result<(Run, Vec<Vec3>, Trajectory), BenchError> {
-    let started = Instant::now();
-    let n = cells_across(nx);
-    let case = format!("{} PD {nx}x{n}x{n} k={k}", motion.name());
-    let physics = |cause| BenchError::Physics {
-        case: case.clone(),
-        cause,
-    };
-    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &motion.material())?;
-    let bonds = b.bonds();
-    let tracked: Vec<u32> = b.select(|x| x[0] > 0.0);
-    let mut loads = Loads::new(b.rest().len()).with_gravity(motion.gravity());
-    loads.anchor(&held, [0.0; 3]).map_err(physics)?;
-    let mut s = b.solver(&case, loads)?;
-    // The clamp layer behind x = 0 starts, and stays, at rest.
-    set_velocities(&mut s, |x| {
-        if x[0] > 0.0 {
-            motion.velocity(x)
-        } else {
-            [0.0; 3]
-        }
-    });
-    let per_sample = (motion.duration() / SAMPLES as f64 / s.dt()).ceil() as u64;
-    let mut out = Vec::with_capacity(SAMPLES);
-    for _ in 0..SAMPLES {
-        for _ in 0..per_sample {
-            s.step().map_err(physics)?;
-        }
-        let y = s.positions();
-        out.push(tracked.iter().map(|&i| y[i as usize]).collect());
+/// Largest distance between corresponding points of `a` and `b` (m), over the diagonal.
+pub(super) fn deviation_at(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        let d = ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt();
+        worst = worst.max(d);
     }
-    let rest = rest_of(&s);
-    let points = tracked.iter().map(|&i| rest[i as usize]).collect();
-    let run = Run::peridynamics([nx, n, n], k, started, per_sample * SAMPLES as u64, bonds);
-    Ok((run, points, out))
+    worst / diagonal()
 }
 
 fn motion_case(
@@ -229,6 +217,10 @@ fn motion_case(
         (Effort::Tiny, _) => (&[20], &[1.5], 10),
         (Effort::Full, Motion::Swing) => (&[20, 30, 40, 60], &HORIZON_FACTORS, 20),
         (Effort::Full, Motion::Twist) => (&[20, 30, 40, 60], &HORIZON_FACTORS, 40),
+    };
+    let xu_levels: &[usize] = match effort {
+        Effort::Tiny => &[20],
+        Effort::Full => &XU_LEVELS,
     };
     // The reference is the finer of two meshes; the coarser one, and a run of it at half the
     // step, bound its error.
@@ -245,24 +237,36 @@ fn motion_case(
         motion.name()
     ));
     let reference = Reference::run(motion, fine_nx, 0.5)?;
-    let mut runs = Vec::new();
-    let (mut by_mesh, mut by_step): (f64, f64) = (0.0, 0.0);
+    // Chen's model over the whole sweep, then Xu's explicitly and implicitly at k = 1.5 on the
+    // resolutions of the speed-against-error table.
+    let mut plan: Vec<(Method, usize, f64)> = Vec::new();
     for &k in factors {
         for &nx in levels {
-            progress(&format!(
-                "{}: peridynamics at {nx} cells along, k = {k}",
-                motion.name()
-            ));
-            let (mut run, points, pd) = peridynamics(motion, nx, k)?;
-            let fem = reference.at(&points)?;
-            let coarse_at = coarse.at(&points)?;
-            by_mesh = by_mesh.max(deviation(&fem, &coarse_at));
-            by_step = by_step.max(deviation(&coarse_at, &half.at(&points)?));
-            let dev = deviation(&pd, &fem);
-            run.value = dev;
-            run.error = dev;
-            runs.push(run);
+            plan.push((Method::ChenExplicit, nx, k));
         }
+    }
+    for &nx in xu_levels {
+        for m in XU_METHODS {
+            plan.push((m, nx, XU_FACTOR));
+        }
+    }
+    let mut runs = Vec::new();
+    let (mut by_mesh, mut by_step): (f64, f64) = (0.0, 0.0);
+    for (method, nx, k) in plan {
+        progress(&format!(
+            "{}: {} at {nx} cells along, k = {k}",
+            motion.name(),
+            method.label()
+        ));
+        let (mut run, points, pd) = method.run(motion, nx, k)?;
+        let fem = reference.at(&points)?;
+        let coarse_at = coarse.at(&points)?;
+        by_mesh = by_mesh.max(deviation(&fem, &coarse_at));
+        by_step = by_step.max(deviation(&coarse_at, &half.at(&points)?));
+        let dev = deviation(&pd, &fem);
+        run.value = dev;
+        run.error = dev;
+        runs.push(run);
     }
     let ref_cost = (reference.wall_s, reference.steps);
     // Quadratic elements converge at least at second order, so the finer mesh's own error is
@@ -286,7 +290,11 @@ fn motion_case(
          stable step). At {fem_nx} cells along the answer differs from it by {:.3}% of the \
          diagonal, and halving the step there moves it by {:.4}%: for second-order elements \
          the reference's own error is then at most {:.3}%, under a tenth of {resolved} of the \
-         {} peridynamic deviations (those above {:.2}%).",
+         {} peridynamic deviations (those above {:.2}%). Besides Chen's model (the paper's, \
+         stepped explicitly), Xu's neo-Hookean-like model with the same E and nu (consistent \
+         moduli) runs explicitly and implicitly at {}, {} and {} steps per 1/24 s frame ({}, \
+         {} and {} steps over the {} s; the scene's implicit defaults, tolerance 1e-4 and at \
+         most 100 iterations a step, no damping but the step's own).",
         match motion {
             Motion::Swing => "released straight under gravity",
             Motion::Twist => "started with an angular velocity about x growing from 0 at the clamp to 40 rad/s at the free end",
@@ -300,7 +308,18 @@ fn motion_case(
         100.0 * ref_error,
         runs.len(),
         1000.0 * ref_error,
+        PER_FRAME[0],
+        PER_FRAME[1],
+        PER_FRAME[2],
+        implicit_steps(motion.duration(), PER_FRAME[0]),
+        implicit_steps(motion.duration(), PER_FRAME[1]),
+        implicit_steps(motion.duration(), PER_FRAME[2]),
+        motion.duration(),
     );
+    let tables = vec![(
+        "Wall time to simulate the same seconds, against the error".to_string(),
+        speed_table(&runs, xu_levels),
+    )];
     Ok(CaseReport {
         name: match motion {
             Motion::Swing => "swing".into(),
@@ -318,7 +337,47 @@ fn motion_case(
         table,
         plot,
         runs,
+        tables,
     })
+}
+
+/// The runs on the resolutions of `levels` cells along, one row each: method, cells, `k`, wall
+/// time, steps, iterations per step (implicit), error.
+fn speed_table(runs: &[Run], levels: &[usize]) -> Table {
+    let mut t = Table::new(&[
+        "method",
+        "cells",
+        "k",
+        "wall time (s)",
+        "steps",
+        "iterations / step",
+        "capped steps",
+        "error (deviation / diagonal)",
+    ]);
+    for &nx in levels {
+        let n = cells_across(nx);
+        let cells = format!("{nx}x{n}x{n}");
+        for r in runs.iter().filter(|r| r.resolution == cells) {
+            let (per_step, capped) = match r.implicit {
+                Some(st) => (
+                    format!("{:.1}", st.iterations as f64 / r.steps.max(1) as f64),
+                    st.capped_steps.to_string(),
+                ),
+                None => ("-".into(), "-".into()),
+            };
+            t.push(vec![
+                r.method.clone(),
+                r.resolution.clone(),
+                r.horizon_factor.map_or("-".into(), |k| format!("{k:.1}")),
+                format!("{:.2}", r.wall_s),
+                r.steps.to_string(),
+                per_step,
+                capped,
+                format!("{:.2}%", 100.0 * r.error),
+            ]);
+        }
+    }
+    t
 }
 
 /// The swinging bar of Figure 11 against corotated FEM.

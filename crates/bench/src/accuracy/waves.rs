@@ -134,6 +134,7 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
         table,
         plot,
         runs,
+        tables: Vec::new(),
     })
 }
 
@@ -229,5 +230,6 @@ pub fn wave_speed(
         table,
         plot,
         runs,
+        tables: Vec::new(),
     })
 }

@@ -374,6 +374,7 @@ impl QuasiNewton {
         }
         let t = Instant::now();
         self.matrix.solve();
+        self.stats.solves += 1;
         self.stats.solve_seconds += t.elapsed().as_secs_f64();
         for (i, q) in self.d.q.iter_mut().enumerate() {
             let fi = self.matrix.free[i];

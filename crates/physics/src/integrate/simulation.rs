@@ -22,6 +22,8 @@ pub struct SolverStats {
     pub factorizations: u64,
     /// Wall time in factorisations (s).
     pub factor_seconds: f64,
+    /// Triangular solves with the factor, one per search direction (implicit).
+    pub solves: u64,
     /// Wall time in the triangular solves (s).
     pub solve_seconds: f64,
     /// Heap bytes of the factor (implicit).
