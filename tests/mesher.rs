@@ -177,6 +177,7 @@ fn generated_mesh_round_trips_through_every_format() {
             tet_labels: vec![0; mesh.num_tets()],
             boundary_faces: Vec::new(),
             skipped: Default::default(),
+            tet_lines: Vec::new(),
         };
         perifrac_io::write_tet_mesh(&path, &data, TetFormat::from_path(&path).unwrap()).unwrap();
         let back = perifrac_io::read_tet_mesh(&path).unwrap();

@@ -34,6 +34,7 @@ fn samples(dir: &Path) -> Vec<(String, Vec<u8>)> {
         tets,
         boundary_faces: Vec::new(),
         skipped: Vec::new(),
+        tet_lines: Vec::new(),
     };
     let mut out = Vec::new();
     for (name, format) in [

@@ -72,7 +72,8 @@ fn make_run(dir: &Path) {
             }
         }
         frames.push(json!({
-            "index": index, "time": 0.1 * index as f64,
+            // A time with the rounding noise of summed steps, as a run writes it.
+            "index": index, "time": 0.005000000000000044 * index as f64,
             "surface": ply, "povray": include, "particles": null,
             "balls": [{"center": [0.5, -0.3, 0.6], "radius": 0.1}],
             "bounds": {"min": min, "max": max},
@@ -136,6 +137,8 @@ fn writes_one_pov_per_frame_including_its_mesh() {
         assert!(pov.contains("sphere {"), "the ball");
         assert!(pov.contains("light_source"));
     }
+    // The time is shown rounded (issue 17: `t = 0.005000000000000044 s`).
+    assert!(pov1.contains("frame 1 (t = 0.005 s)"), "{pov1}");
     // One camera for the whole sequence.
     assert_eq!(camera_block(&pov0), camera_block(&pov1));
     assert!(!render.join("frame_0000.png").exists());

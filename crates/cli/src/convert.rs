@@ -49,6 +49,16 @@ pub fn run(input: &Path, output: &Path, gmsh22: bool) -> Result<()> {
 }
 
 fn convert_surface(input: &Path, output: &Path) -> Result<()> {
+    if TetFormat::from_path(output).is_ok() {
+        bail!(
+            "{} is a surface and {} a tet mesh format: convert changes formats, not what the \
+             mesh is; make a tet mesh of the surface with `perifrac mesh {} -o {}`",
+            input.display(),
+            output.display(),
+            input.display(),
+            output.display()
+        );
+    }
     let surface = perifrac_io::read_surface(input)?;
     let view = SurfaceRef {
         vertices: &surface.vertices,

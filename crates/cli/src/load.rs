@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{anyhow, bail, Result};
 use perifrac_io::TetMeshData;
 use perifrac_topology::{BuildReport, TetMesh};
 
@@ -20,8 +20,36 @@ pub struct Loaded {
     pub skipped: Vec<(String, usize)>,
 }
 
-/// Reads `path` (format by extension) and validates it as a tet mesh.
+/// Surface extensions: files that hold triangles, not tets.
+pub const SURFACE_EXTENSIONS: [&str; 3] = ["obj", "off", "ply"];
+
+/// Refuses a path that is a directory or a surface file with a message saying so (and, for a
+/// surface, how to make a tet mesh of it), before a tet reader is tried.
+pub fn check_tet_mesh_path(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        bail!("{} is a directory, not a mesh file", path.display());
+    }
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if SURFACE_EXTENSIONS.contains(&ext.as_str()) {
+        let stem = path.with_extension("mesh");
+        bail!(
+            "{} is a surface mesh (triangles), not a tet mesh; make a tet mesh of it with \
+             `perifrac mesh {} -o {}`",
+            path.display(),
+            path.display(),
+            stem.display()
+        );
+    }
+    Ok(())
+}
+
+/// Reads `path` (format by extension) and validates it as a tet mesh. A problem the
+/// validation finds names the file and the tet's line, tets and vertices counted from 1.
 pub fn load_tet_mesh(path: &Path) -> Result<Loaded> {
+    check_tet_mesh_path(path)?;
     let data = perifrac_io::read_tet_mesh(path)?;
     let TetMeshData {
         vertices,
@@ -29,9 +57,10 @@ pub fn load_tet_mesh(path: &Path) -> Result<Loaded> {
         tet_labels,
         boundary_faces,
         skipped,
+        tet_lines,
     } = data;
     let (mesh, report) = TetMesh::new(vertices, tets)
-        .with_context(|| format!("{} is not a valid tet mesh", path.display()))?;
+        .map_err(|e| anyhow!(e.located(&perifrac_io::tet_lines_file(path), &tet_lines)))?;
     Ok(Loaded {
         mesh,
         report,
@@ -49,5 +78,6 @@ pub fn to_data(mesh: &TetMesh, tet_labels: Vec<i32>, boundary_faces: Vec<[u32; 3
         tet_labels,
         boundary_faces,
         skipped: Vec::new(),
+        tet_lines: Vec::new(),
     }
 }

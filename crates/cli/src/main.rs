@@ -63,6 +63,9 @@ enum Command {
         /// Exact cell counts along x, y, z, e.g. `40,8,40`.
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<usize>>,
+        /// Go on when the mesh would need more memory than is available.
+        #[arg(long)]
+        allow_large: bool,
     },
     /// Simulate a scene file and write crack-surface frames (PLY, POV-Ray) into a directory.
     Run(run::RunArgs),
@@ -95,6 +98,7 @@ fn main() -> ExitCode {
             cells,
             edge_length,
             tetgen,
+            allow_large,
         } => mesh::run(
             &input,
             &output,
@@ -103,6 +107,7 @@ fn main() -> ExitCode {
                 cells: cells.as_deref(),
                 edge_length,
                 tetgen,
+                allow_large,
             },
         ),
         Command::Info { mesh, json } => info::run(&mesh, json),

@@ -7,7 +7,7 @@ use std::process::Command;
 use anyhow::{bail, Context, Result};
 use perifrac_io::TetFormat;
 use perifrac_topology::mesher::{
-    cylinder_surface, mesh_surface, sphere_surface, MesherOptions, MesherReport,
+    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, MesherOptions, MesherReport,
 };
 use perifrac_topology::{primitives, TetMesh};
 
@@ -77,6 +77,8 @@ pub struct MeshArgs<'a> {
     pub edge_length: Option<f64>,
     /// Use TetGen instead of the built-in mesher (surfaces only).
     pub tetgen: bool,
+    /// Go on when the estimated memory passes what is available.
+    pub allow_large: bool,
 }
 
 /// Cells across the longest side of a primitive when none is given.
@@ -85,6 +87,9 @@ const DEFAULT_PRIMITIVE_RESOLUTION: usize = 20;
 /// Meshes `input` (an existing surface file, or else a primitive spec) into `output`.
 pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
     let path = Path::new(input);
+    if path.is_dir() {
+        bail!("{input} is a directory, not a surface file (.obj, .ply, .off) or a primitive spec");
+    }
     if path.is_file() {
         if args.cells.is_some() {
             bail!("--cells applies to primitives only; use --resolution or --edge-length");
@@ -109,7 +114,26 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         output,
         args.resolution.unwrap_or(DEFAULT_PRIMITIVE_RESOLUTION),
         args.cells,
+        args.allow_large,
     )
+}
+
+/// Refuses a mesh of `tets` tets on `vertices` vertices whose estimated memory
+/// ([`perifrac_scene::budget::mesh_memory`]) passes what is available, unless `allow_large`.
+fn check_memory(tets: u64, vertices: u64, allow_large: bool) -> Result<()> {
+    use perifrac_scene::budget;
+    let need = budget::mesh_memory(tets, vertices);
+    let (have, source) = budget::available_memory();
+    if need > have && !allow_large {
+        bail!(
+            "{} tets would need about {} of memory, more than the {} available ({source}); \
+             use fewer cells, or pass --allow-large to mesh anyway",
+            budget::count(tets),
+            budget::bytes(need),
+            budget::bytes(have)
+        );
+    }
+    Ok(())
 }
 
 /// Meshes a surface file with the built-in mesher and prints its report.
@@ -133,6 +157,9 @@ fn mesh_and_write(
         edge_length: args.edge_length,
         resolution: args.resolution,
     };
+    // A BCC lattice has about one vertex per six tets.
+    let tets = estimated_tets(vertices, &opts).ceil() as u64;
+    check_memory(tets, tets / 6 + 1, args.allow_large)?;
     let out =
         mesh_surface(vertices, faces, &opts).with_context(|| format!("cannot mesh {what}"))?;
     print_report(&out.report);
@@ -309,15 +336,18 @@ fn run_primitive(
     output: &Path,
     resolution: usize,
     cells: Option<&[usize]>,
+    allow_large: bool,
 ) -> Result<()> {
     let prim = parse_primitive(spec)?;
     let counts = cell_counts(prim.size, resolution, cells)?;
-    let tets = 6u64 * counts.iter().map(|&c| c as u64).product::<u64>();
-    if tets > u32::MAX as u64 / 2 {
-        bail!("{counts:?} cells would make {tets} tets, more than perifrac indexes");
-    }
+    let [nx, ny, nz] = counts;
+    let what = || format!("`{spec}` in {nx}x{ny}x{nz} cells");
+    // Checked counts, sizes within range and cells with a volume, before anything is allocated.
+    let (vertices, tets) = primitives::box_counts(counts).with_context(what)?;
+    primitives::check_box([0.0; 3], prim.size, counts).with_context(what)?;
+    check_memory(tets as u64, vertices as u64, allow_large)?;
     let format = TetFormat::from_path(output)?;
-    let mesh = primitives::box_mesh([0.0; 3], prim.size, counts);
+    let mesh = primitives::try_box_mesh([0.0; 3], prim.size, counts).with_context(what)?;
     let data = to_data(&mesh, vec![0; mesh.num_tets()], Vec::new());
     perifrac_io::write_tet_mesh(output, &data, format)?;
     eprintln!(
@@ -369,5 +399,33 @@ mod tests {
         );
         assert!(cell_counts([1.0; 3], 0, None).is_err());
         assert!(cell_counts([1.0; 3], 5, Some(&[1, 0, 1])).is_err());
+    }
+
+    #[test]
+    fn primitives_that_cannot_be_meshed_are_errors_not_panics() {
+        let dir = std::env::temp_dir().join(format!("perifrac-mesh-test-{}", std::process::id()));
+        let out = dir.join("o.mesh");
+        // The reproducers of issue 17 (each panicked or aborted before).
+        for (spec, cells, expect) in [
+            ("box:1e8x1x1", None, "too flat"),
+            ("box:1e-30x1x1", None, "too flat"),
+            ("box:1e308x1x1", None, "beyond 1e50"),
+            ("bar:1e308x1x1", None, "beyond 1e50"),
+            (
+                "box:1x1x1",
+                Some(vec![4_294_967_296, 4_294_967_296, 1]),
+                "more than a mesh can index",
+            ),
+            (
+                "box:1x1x1",
+                Some(vec![9_223_372_036_854_775_808, 2, 1]),
+                "more than a mesh can index",
+            ),
+        ] {
+            let e = run_primitive(spec, &out, 20, cells.as_deref(), false).unwrap_err();
+            let msg = format!("{e:#}");
+            assert!(msg.contains(spec) && msg.contains(expect), "{spec}: {msg}");
+            assert!(!out.exists());
+        }
     }
 }

@@ -174,7 +174,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "[{}/{n}] frame {} (t = {} s) -> {} ({:.1} s)",
             k + 1,
             frame.index,
-            frame.time,
+            shown_time(frame.time),
             png.display(),
             start.elapsed().as_secs_f64()
         );
@@ -449,7 +449,7 @@ fn scene_text(
          // Data have up = {:?} and are right-handed; POV-Ray is y-up and left-handed, so every\n\
          // point here has y and z swapped, and so has the mesh (its matrix).",
         frame.index,
-        frame.time,
+        shown_time(frame.time),
         frame.index,
         args.width,
         args.height,
@@ -649,8 +649,33 @@ fn normalized(a: [f64; 3]) -> [f64; 3] {
     scale(a, 1.0 / norm(a))
 }
 
+/// A frame time (s) for people: rounded to 9 significant digits, which drops the rounding
+/// noise of summed steps (`0.005000000000000044` is `0.005`), then the shortest digits, with
+/// an exponent only where they would be long.
+fn shown_time(t: f64) -> String {
+    let rounded: f64 = format!("{t:.8e}").parse().unwrap_or(t);
+    let plain = format!("{rounded}");
+    let exponent = format!("{rounded:e}");
+    if plain.len() > exponent.len() + 3 {
+        exponent
+    } else {
+        plain
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn frame_times_are_shown_rounded() {
+        use super::shown_time;
+        // Issue 17: render printed `t = 0.005000000000000044 s`.
+        assert_eq!(shown_time(0.005000000000000044), "0.005");
+        assert_eq!(shown_time(0.0), "0");
+        assert_eq!(shown_time(2.0833333333333335e-4), "0.000208333333");
+        assert_eq!(shown_time(1e-9), "1e-9");
+        assert_eq!(shown_time(12.5), "12.5");
+    }
+
     use super::*;
 
     /// Every corner of the framed box projects inside the picture, for z-up and y-up runs and

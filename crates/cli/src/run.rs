@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use perifrac_scene::{check_output_dir, Observer, Progress, Scene, Setup};
+use perifrac_scene::{check_output_dir, Limits, Observer, Progress, Scene, SceneError, Setup};
 
 /// Arguments of `perifrac run`.
 #[derive(clap::Args, Debug)]
@@ -23,35 +23,79 @@ pub struct RunArgs {
     /// Frames after the initial one (overrides the scene's output.frames).
     #[arg(long)]
     pub frames: Option<usize>,
-    /// Worker threads (default: all cores). Results are identical for the same count.
+    /// Worker threads (default: all cores; at most twice the cores). Results are identical for
+    /// the same count.
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Go on with a run that passes a budget: more memory than is available, more than 1e8
+    /// steps, more than 100 GB of output or more than a day's estimated run time.
+    #[arg(long)]
+    pub allow_large: bool,
     /// No progress bar, only the summary.
     #[arg(short, long)]
     pub quiet: bool,
 }
 
+/// Most worker threads per core: more only adds switching (compute-bound work), and a typo
+/// such as `--threads 100000` would start that many threads.
+pub const MAX_THREADS_PER_CORE: usize = 2;
+
+/// The thread count to use for `--threads requested` on a machine with `cores` cores: at most
+/// [`MAX_THREADS_PER_CORE`] per core, with a note when it is lowered.
+pub fn capped_threads(requested: usize, cores: usize) -> (usize, Option<String>) {
+    let most = MAX_THREADS_PER_CORE.saturating_mul(cores.max(1));
+    if requested > most {
+        let note = format!(
+            "--threads {requested} is more than {MAX_THREADS_PER_CORE} per core on this \
+             machine's {cores} core(s); using {most}"
+        );
+        (most, Some(note))
+    } else {
+        (requested, None)
+    }
+}
+
 /// Runs a scene.
 pub fn run(args: &RunArgs) -> Result<()> {
-    if let Some(t) = args.threads {
-        anyhow::ensure!(t >= 1, "--threads must be at least 1");
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("cannot set up the worker threads")?;
-    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = match args.threads {
+        Some(t) => {
+            anyhow::ensure!(t >= 1, "--threads must be at least 1");
+            let (t, note) = capped_threads(t, cores);
+            if let Some(note) = note {
+                eprintln!("{note}");
+            }
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build_global()
+                .context("cannot set up the worker threads")?;
+            t
+        }
+        None => rayon::current_num_threads(),
+    };
     if args.frames == Some(0) {
         anyhow::bail!("--frames must be at least 1");
     }
     check_output_dir(&args.output, args.force)?;
     let started = Instant::now();
     let scene = Scene::load(&args.scene)?;
-    let setup = Setup::new(&scene, args.frames)?;
+    let limits = Limits {
+        threads,
+        allow_large: args.allow_large,
+        ..Limits::for_this_machine()
+    };
+    let setup = Setup::with_limits(&scene, args.frames, &limits).map_err(|e| match e {
+        SceneError::TooLarge { .. } => {
+            anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
+        }
+        other => other.into(),
+    })?;
     let info = &setup.info;
     let frames = setup.frames;
     eprintln!(
         "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
-         (explicit stable limit {:.3e} s{}), {} frames of {} steps, setup {:.2} s",
+         (explicit stable limit {:.3e} s{}), {} frames of {} steps, {} on {threads} \
+         thread(s), setup {:.2} s",
         args.scene.display(),
         info.particles,
         info.bonds,
@@ -67,6 +111,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         },
         frames,
         setup.steps_per_frame,
+        info.estimate,
         started.elapsed().as_secs_f64()
     );
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
@@ -185,5 +230,23 @@ impl Observer for Bar {
             "t {:.3e}/{:.3e} s, {:.0} steps/s, {} broken, {} fragments, frame {}",
             p.time, p.duration, rate, p.broken_bonds, p.fragments, p.frames_written
         ));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn threads_are_capped_at_twice_the_cores() {
+        assert_eq!(capped_threads(4, 2), (4, None));
+        let (t, note) = capped_threads(100_000, 16);
+        assert_eq!(t, 32);
+        let note = note.unwrap();
+        assert!(
+            note.contains("--threads 100000") && note.contains("using 32"),
+            "{note}"
+        );
+        assert_eq!(capped_threads(usize::MAX, usize::MAX).0, usize::MAX);
     }
 }

@@ -231,39 +231,63 @@ impl Colliders {
         self.grounds.is_empty() && self.balls.is_empty()
     }
 
-    /// Setup check: `Err(ContactError::Overlap)` naming the first particle (lowest index;
-    /// grounds before balls) whose contact sphere (centre `y`, radius `radius`, m) starts inside
-    /// a collider, with the depth of the overlap. Touching is allowed (an overlap below a
-    /// billionth of the radii counts as touching). A sphere that starts inside would be shot out
-    /// by the penalty force stored in its overlap. Uses parry3d point queries;
-    /// `O(particles x colliders)`.
+    /// Setup check: `Err(ContactError::Overlap)` naming the particle whose contact sphere
+    /// (centre `y`, radius `radius`, m) reaches deepest into a collider, with that collider and
+    /// the depth (ties go to the lowest particle index, then to grounds before balls, so the
+    /// message is deterministic). The deepest, not the first: the depth is how far the
+    /// collider has to move. Touching is allowed (an overlap below a billionth of the radii
+    /// counts as touching). A sphere that starts inside would be shot out by the penalty force
+    /// stored in its overlap. Uses parry3d point queries; `O(particles x colliders)`.
     ///
     /// Panics when `y` and `radius` differ in length.
     #[track_caller]
     pub fn check_clear(&self, y: &[Vec3], radius: &[f64]) -> Result<(), ContactError> {
         assert_eq!(y.len(), radius.len(), "one radius per particle");
-        let hit = (0..y.len()).into_par_iter().find_map_first(|i| {
+        // Per particle its deepest overlap: (depth, particle, collider index; grounds first).
+        let deepest = |i: usize| -> Option<(f64, usize, usize)> {
             let p = to_parry(y[i]);
             let r = radius[i];
+            let mut best: Option<(f64, usize, usize)> = None;
+            let mut consider = |depth: f64, tolerance: f64, collider: usize| {
+                if depth > tolerance && best.is_none_or(|(d, _, _)| depth > d) {
+                    best = Some((depth, i, collider));
+                }
+            };
             for (j, g) in self.grounds.iter().enumerate() {
                 let depth = r - g.shape.distance_to_point(&g.pose, p, false);
-                if depth > overlap_tolerance(r) {
-                    return Some((format!("ground {j}"), i, depth));
-                }
+                consider(depth, overlap_tolerance(r), j);
             }
             for (j, b) in self.balls.iter().enumerate() {
                 // Signed: negative inside the ball, down to -radius at its centre.
                 let dist = b.shape.distance_to_point(&b.pose, p, false);
                 let depth = r - dist;
-                if depth > overlap_tolerance(r + b.shape.radius) {
-                    return Some((format!("ball {j}"), i, depth));
-                }
+                consider(
+                    depth,
+                    overlap_tolerance(r + b.shape.radius),
+                    self.grounds.len() + j,
+                );
             }
-            None
-        });
+            best
+        };
+        // Deeper wins; at equal depth the lower particle (then collider) index.
+        let deeper = |a: (f64, usize, usize), b: (f64, usize, usize)| {
+            if b.0 > a.0 || (b.0 == a.0 && (b.1, b.2) < (a.1, a.2)) {
+                b
+            } else {
+                a
+            }
+        };
+        let hit = (0..y.len())
+            .into_par_iter()
+            .filter_map(deepest)
+            .reduce_with(deeper);
         match hit {
-            Some((collider, particle, depth)) => Err(ContactError::Overlap {
-                collider,
+            Some((depth, particle, c)) => Err(ContactError::Overlap {
+                collider: if c < self.grounds.len() {
+                    format!("ground {c}")
+                } else {
+                    format!("ball {}", c - self.grounds.len())
+                },
                 particle,
                 depth,
             }),

@@ -140,6 +140,34 @@ fn check_clear_catches_contact_spheres_inside() {
             depth: 0.05
         }
     );
+    // Issue 17: the deepest overlap is reported, not the lowest index (particle 0 reaches
+    // 1 mm below the ground, particle 1 sits 3 cm inside the ball).
+    let e = col
+        .check_clear(
+            &[[3.0, 0.0, 0.099], [0.0, 0.0, 0.53], [0.0, 0.0, 0.099]],
+            &r,
+        )
+        .unwrap_err();
+    match e {
+        ContactError::Overlap {
+            collider,
+            particle,
+            depth,
+        } => {
+            assert_eq!((collider.as_str(), particle), ("ball 0", 1));
+            // Centre 0.03 m inside the ball's surface, plus the 0.1 m contact radius.
+            assert!((depth - 0.13).abs() < 1e-12, "{depth}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Equal depths: the lowest particle index.
+    let e = col
+        .check_clear(&[[3.0, 0.0, 0.2], [5.0, 0.0, 0.05], [4.0, 0.0, 0.05]], &r)
+        .unwrap_err();
+    assert!(
+        matches!(e, ContactError::Overlap { particle: 1, .. }),
+        "{e:?}"
+    );
     // The exact ball centre (where parry's projection is undefined) is caught too.
     let e = col.check_clear(&[[0.0, 0.0, 1.0]], &[0.0]).unwrap_err();
     assert!(

@@ -25,7 +25,8 @@ fn write_then_rename<F>(path: &Path, tmp: &Path, f: F) -> Result<(), IoError>
 where
     F: FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 {
-    let file = File::create(tmp).map_err(|e| IoError::io(tmp, e))?;
+    // The error names `path`, the file the caller asked for, not the temporary name.
+    let file = File::create(tmp).map_err(|e| IoError::io(path, e))?;
     let mut writer = BufWriter::with_capacity(1 << 20, file);
     f(&mut writer).map_err(|e| IoError::io(path, e))?;
     writer.flush().map_err(|e| IoError::io(path, e))?;
@@ -77,5 +78,19 @@ mod tests {
         assert!(err.to_string().contains("a.txt"), "{err}");
         assert_eq!(std::fs::read(&p).unwrap(), b"keep");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn a_failure_to_create_names_the_final_file_not_the_temporary() {
+        let dir = tempfile::tempdir().unwrap();
+        // A regular file where the directory should be: creating anything inside it fails,
+        // for root too.
+        let blocker = dir.path().join("frames");
+        std::fs::write(&blocker, b"").unwrap();
+        let p = blocker.join("surface_0001.ply");
+        let err = atomic_write(&p, |w| w.write_all(b"x")).unwrap_err();
+        let msg = err.to_string();
+        assert!(msg.starts_with(&format!("{}: ", p.display())), "{msg}");
+        assert!(!msg.contains(".surface_0001.ply.tmp"), "{msg}");
     }
 }

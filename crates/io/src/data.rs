@@ -15,6 +15,10 @@ pub struct TetMeshData {
     pub boundary_faces: Vec<[u32; 3]>,
     /// Element kinds counted and skipped, e.g. `("gmsh type 1 (line)", 1200)`.
     pub skipped: Vec<(String, usize)>,
+    /// The 1-based line each tet was read from (same length as `tets`), so that a problem found
+    /// after reading (a flat tet, a face shared by three tets) can point at its line; empty for
+    /// a mesh that did not come from a file. Writers ignore it.
+    pub tet_lines: Vec<usize>,
 }
 
 /// A triangle surface; polygons from OBJ/PLY/OFF are fan-triangulated.

@@ -279,6 +279,7 @@ fn elements_v2(
             4 => {
                 mesh.tets.push(lookup::<4>(t, map, "tetrahedron", id)?);
                 mesh.tet_labels.push(physical);
+                mesh.tet_lines.push(t.line());
             }
             2 => mesh
                 .boundary_faces
@@ -323,6 +324,7 @@ fn elements_v4(
                 4 => {
                     mesh.tets.push(lookup::<4>(t, map, "tetrahedron", id)?);
                     mesh.tet_labels.push(entity);
+                    mesh.tet_lines.push(t.line());
                 }
                 2 => mesh
                     .boundary_faces

@@ -56,6 +56,15 @@ pub fn read_tet_mesh(path: &Path) -> Result<TetMeshData, IoError> {
     }
 }
 
+/// The file whose lines [`TetMeshData::tet_lines`] counts for a mesh read from `path`: the
+/// `.ele` beside a TetGen `.node`, otherwise `path` itself.
+pub fn tet_lines_file(path: &Path) -> std::path::PathBuf {
+    match TetFormat::from_path(path) {
+        Ok(TetFormat::TetGen) => path.with_extension("ele"),
+        _ => path.to_path_buf(),
+    }
+}
+
 /// Writes a tet mesh in `format`, atomically. For TetGen, `path` may name the `.node` or the
 /// `.ele`; both (and a `.face` when there are boundary faces) are written beside each other.
 pub fn write_tet_mesh(path: &Path, mesh: &TetMeshData, format: TetFormat) -> Result<(), IoError> {
@@ -70,9 +79,10 @@ pub fn write_tet_mesh(path: &Path, mesh: &TetMeshData, format: TetFormat) -> Res
 }
 
 /// Reads a triangle surface by extension: `.obj` (tobj), `.ply` (ASCII or binary), `.off`.
-/// Polygons are fan-triangulated.
+/// Polygons are fan-triangulated. A file without vertices or without faces is an error: it is
+/// no surface.
 pub fn read_surface(path: &Path) -> Result<SurfaceData, IoError> {
-    match format::extension(path).as_deref() {
+    let surface = match format::extension(path).as_deref() {
         Some("obj") => obj::read(path),
         Some("ply") => read_ply_crack(path).map(|(s, _)| s),
         Some("off") => off::read(path),
@@ -80,7 +90,18 @@ pub fn read_surface(path: &Path) -> Result<SurfaceData, IoError> {
             file: path.to_path_buf(),
             known: SURFACE_IN,
         }),
+    }?;
+    let empty = |what: &str| IoError::Format {
+        file: path.to_path_buf(),
+        message: format!("no {what}: the file holds no surface"),
+    };
+    if surface.vertices.is_empty() {
+        return Err(empty("vertices"));
     }
+    if surface.faces.is_empty() {
+        return Err(empty("faces"));
+    }
+    Ok(surface)
 }
 
 /// Writes a surface by extension: `.ply` (binary little-endian), `.obj`, `.inc`/`.pov`

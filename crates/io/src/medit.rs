@@ -103,6 +103,7 @@ pub(crate) fn parse(path: &Path, data: &[u8]) -> Result<TetMeshData, IoError> {
                     let tet = check::element(&t, line, raw, 1, limit, "tet", id, "the file")?;
                     mesh.tets.push(tet);
                     mesh.tet_labels.push(label);
+                    mesh.tet_lines.push(line);
                 }
             }
             b"triangles" => {

@@ -1,15 +1,18 @@
 //! Wavefront OBJ: reader (through tobj) and writer.
 
+use crate::error::read_all;
 use crate::numfmt::{write_f64, write_xyz};
 use crate::{atomic_write, IoError, SurfaceData, SurfaceRef};
 use std::io::Write;
 use std::path::Path;
 
 /// Reads an OBJ with tobj (polygons triangulated); all objects/groups are merged into one
-/// surface. Points and lines are ignored.
+/// surface. Points and lines are ignored. The vertex and face lines are checked first, with
+/// their line numbers ([`check_lines`]): tobj's own errors carry none.
 pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
-    // tobj reports a missing file without the OS error; check first so the message is useful.
-    std::fs::metadata(path).map_err(|e| IoError::io(path, e))?;
+    // tobj reports a missing file without the OS error; reading it first gives the OS error.
+    let text = read_all(path)?;
+    check_lines(path, &text)?;
     // Other tobj features (merging, reordering) add fields; keep the struct update for them.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -51,7 +54,96 @@ pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
             surface.faces.push(face);
         }
     }
+    // check_lines refused these already; kept so that no path returns a non-finite vertex.
+    if let Some(i) = surface
+        .vertices
+        .iter()
+        .position(|p| !p.iter().all(|x| x.is_finite()))
+    {
+        return Err(IoError::Format {
+            file: path.to_path_buf(),
+            message: format!("vertex {} has a non-finite coordinate", i + 1),
+        });
+    }
     Ok(surface)
+}
+
+/// Checks every `v` line (three finite coordinates) and `f` line (at least three corners, each
+/// starting with the number of an existing vertex: 1-based, or negative, counted back from the
+/// last vertex so far) of an OBJ, reporting the 1-based line of the first problem.
+fn check_lines(path: &Path, text: &[u8]) -> Result<(), IoError> {
+    let is_vertex = |raw: &[u8]| {
+        let mut words = raw
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty());
+        words.next() == Some(&b"v"[..])
+    };
+    let total = text
+        .split(|&b| b == b'\n')
+        .filter(|l| is_vertex(&l[..]))
+        .count();
+    let mut seen = 0usize;
+    for (k, raw) in text.split(|&b| b == b'\n').enumerate() {
+        let line = k + 1;
+        let err = |message: String| IoError::parse(path, line, message);
+        let Ok(s) = std::str::from_utf8(raw) else {
+            return Err(err("not UTF-8 text (an OBJ file is text)".into()));
+        };
+        let mut words = s.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                seen += 1;
+                for axis in ["x", "y", "z"] {
+                    let Some(w) = words.next() else {
+                        return Err(err(format!(
+                            "vertex {seen} has no {axis} coordinate (expected v x y z)"
+                        )));
+                    };
+                    let x: f64 = w.parse().map_err(|_| {
+                        err(format!(
+                            "vertex {seen}: the {axis} coordinate \"{w}\" is not a number"
+                        ))
+                    })?;
+                    if !x.is_finite() {
+                        return Err(err(format!(
+                            "vertex {seen}: the {axis} coordinate is NaN/infinite (found \"{w}\")"
+                        )));
+                    }
+                }
+            }
+            Some("f") => {
+                let mut corners = 0;
+                for w in words {
+                    let first = w.split('/').next().unwrap_or("");
+                    let i: i64 = first.parse().map_err(|_| {
+                        err(format!(
+                            "face corner \"{w}\" does not start with a vertex number"
+                        ))
+                    })?;
+                    let exists = match i {
+                        0 => false,
+                        i if i > 0 => i.unsigned_abs() <= total as u64,
+                        i => i.unsigned_abs() <= seen as u64,
+                    };
+                    if !exists {
+                        return Err(err(format!(
+                            "face corner \"{w}\": there is no vertex {i} (the file has {total} \
+                             vertices, {seen} before this line; indices start at 1, negative \
+                             ones count back)"
+                        )));
+                    }
+                    corners += 1;
+                }
+                if corners < 3 {
+                    return Err(err(format!(
+                        "a face needs at least 3 corners, found {corners}"
+                    )));
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Writes an OBJ: `v x y z` (plus `r g b` in 0..1 when the surface has colours, the common
@@ -81,4 +173,51 @@ pub fn write_obj(path: &Path, surface: &SurfaceRef) -> Result<(), IoError> {
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(text: &str) -> Result<(), String> {
+        check_lines(Path::new("m.obj"), text.as_bytes()).map_err(|e| e.to_string())
+    }
+
+    const CUBE_CORNER: &str = "# a tet\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n\
+                               f 1 3 2\nf 1 2 4\nf 2 3 4\nf -4/1 -1/1/1 -2//1\n";
+
+    #[test]
+    fn good_lines_pass() {
+        check(CUBE_CORNER).unwrap();
+    }
+
+    #[test]
+    fn problems_name_the_line() {
+        let e = check(&CUBE_CORNER.replace("v 1 0 0", "v nan 0 0")).unwrap_err();
+        assert!(
+            e.starts_with("m.obj:3: vertex 2: the x coordinate is NaN/infinite"),
+            "{e}"
+        );
+        let e = check(&CUBE_CORNER.replace("v 0 0 1", "v 0 0 inf")).unwrap_err();
+        assert!(e.starts_with("m.obj:5: vertex 4: the z coordinate"), "{e}");
+        let e = check(&CUBE_CORNER.replace("v 0 1 0", "v 0 1")).unwrap_err();
+        assert!(
+            e.starts_with("m.obj:4: vertex 3 has no z coordinate"),
+            "{e}"
+        );
+        let e = check(&CUBE_CORNER.replace("f 1 2 4", "f 1 2 9")).unwrap_err();
+        assert!(
+            e.starts_with("m.obj:7: face corner \"9\": there is no vertex 9"),
+            "{e}"
+        );
+        let e = check(&CUBE_CORNER.replace("f 2 3 4", "f 2 x 4")).unwrap_err();
+        assert!(e.starts_with("m.obj:8: face corner \"x\""), "{e}");
+        let e = check(&CUBE_CORNER.replace("f 2 3 4", "f 2 3")).unwrap_err();
+        assert!(
+            e.starts_with("m.obj:8: a face needs at least 3 corners"),
+            "{e}"
+        );
+        let e = check(&CUBE_CORNER.replace("f 1 3 2", "f 0 3 2")).unwrap_err();
+        assert!(e.starts_with("m.obj:6: "), "{e}");
+    }
 }

@@ -82,7 +82,8 @@ pub fn write_ply_points(
 }
 
 /// Reads the `vertex` element of a PLY file as points with every other numeric vertex
-/// property as a named scalar.
+/// property as a named scalar; a NaN or infinite coordinate is an error naming the point
+/// (counted from 1).
 pub fn read_ply_points(path: &Path) -> Result<PointCloud, IoError> {
     let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
     let mut reader = std::io::BufReader::new(file);
@@ -109,13 +110,22 @@ pub fn read_ply_points(path: &Path) -> Result<PointCloud, IoError> {
         let mut p = [0.0; 3];
         for (c, key) in p.iter_mut().zip(["x", "y", "z"]) {
             *c = v.get(key).and_then(scalar_f64).ok_or_else(|| {
-                IoError::invalid(path, format!("vertex {i} has no numeric \"{key}\""))
+                IoError::invalid(path, format!("vertex {} has no numeric \"{key}\"", i + 1))
             })?;
+        }
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(IoError::Format {
+                file: path.to_path_buf(),
+                message: format!("point {} has a non-finite coordinate {p:?}", i + 1),
+            });
         }
         cloud.points.push(p);
         for (name, values) in &mut cloud.scalars {
             let value = v.get(name.as_str()).and_then(scalar_f64).ok_or_else(|| {
-                IoError::invalid(path, format!("vertex {i}: \"{name}\" is not a number"))
+                IoError::invalid(
+                    path,
+                    format!("vertex {}: \"{name}\" is not a number", i + 1),
+                )
             })?;
             values.push(value);
         }
@@ -146,6 +156,10 @@ mod tests {
         assert_eq!(cloud.scalar("damage").unwrap(), &damage);
         assert_eq!(cloud.scalar("mass").unwrap(), &mass);
         assert!(write_ply_points(&path, &pts, &[("bad name", &damage)]).is_err());
+        let bad = vec![[0.0, 1.0, 2.0], [0.0, f64::NAN, 0.0]];
+        write_ply_points(&path, &bad, &[]).unwrap();
+        let e = read_ply_points(&path).unwrap_err().to_string();
+        assert!(e.contains("point 2 has a non-finite coordinate"), "{e}");
         assert!(write_ply_points(&path, &pts, &[("short", &[1.0])]).is_err());
     }
 }

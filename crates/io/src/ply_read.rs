@@ -3,16 +3,20 @@
 //! Reads `vertex` `x y z` (any numeric type), `face` `vertex_indices` or `vertex_index` (a list
 //! of any integer type; polygons fan-triangulated) and an optional per-face `crack` scalar.
 
+use crate::error::read_all;
 use crate::{IoError, SurfaceData};
 use ply_rs_bw::parser::Parser;
-use ply_rs_bw::ply::{DefaultElement, Property};
+use ply_rs_bw::ply::{DefaultElement, Encoding, Header, Property};
 use std::path::Path;
 
 /// Reads a PLY surface and, when the faces carry a `crack` property, the per-triangle flags
 /// (a polygon's flag is repeated for each of its triangles).
+///
+/// NaN and infinite coordinates are refused: by line in an ASCII file (one element per line,
+/// as the format has it), by vertex number (from 1) in a binary one.
 pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoError> {
-    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
-    let mut reader = std::io::BufReader::new(file);
+    let data = read_all(path)?;
+    let mut reader = data.as_slice();
     let parser = Parser::<DefaultElement>::new();
     let ply = parser.read_ply(&mut reader).map_err(|e| {
         let text = e.to_string();
@@ -36,9 +40,17 @@ pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoE
                 *c = v.get(key).and_then(scalar_f64).ok_or_else(|| {
                     format_error(
                         path,
-                        format!("vertex {i} has no numeric \"{key}\" property"),
+                        format!("vertex {} has no numeric \"{key}\" property", i + 1),
                     )
                 })?;
+            }
+            if !p.iter().all(|c| c.is_finite()) {
+                let n = vertices.len();
+                let message = format!("vertex {} of {n} has a non-finite coordinate {p:?}", i + 1);
+                return Err(match first_line_of(&data, &ply.header, "vertex") {
+                    Some(first) => IoError::parse(path, first + i, message),
+                    None => format_error(path, message),
+                });
             }
             surface.vertices.push(p);
         }
@@ -60,26 +72,33 @@ pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoE
             .ok_or_else(|| {
                 format_error(
                     path,
-                    format!("face {i} has no integer \"vertex_indices\" list"),
+                    format!("face {} has no integer \"vertex_indices\" list", i + 1),
                 )
             })?;
         if list.len() < 3 {
             return Err(format_error(
                 path,
-                format!("face {i} has {} vertices, expected at least 3", list.len()),
+                format!(
+                    "face {} has {} vertices, expected at least 3",
+                    i + 1,
+                    list.len()
+                ),
             ));
         }
         if let Some(&bad) = list.iter().find(|&&v| v as usize >= n) {
             return Err(format_error(
                 path,
-                format!("face {i}: vertex index {bad} out of range ({n} vertices)"),
+                format!(
+                    "face {}: vertex index {bad} out of range ({n} vertices, counted from 0)",
+                    i + 1
+                ),
             ));
         }
         let flag = match (&crack, f.get("crack")) {
             (Some(_), Some(p)) => scalar_u8(p).ok_or_else(|| {
                 format_error(
                     path,
-                    format!("face {i}: crack value {p:?} is not an integer 0..255"),
+                    format!("face {}: crack value {p:?} is not an integer 0..255", i + 1),
                 )
             })?,
             _ => 0,
@@ -94,6 +113,25 @@ pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoE
         }
     }
     Ok((surface, crack))
+}
+
+/// The 1-based line of the first `element` of an ASCII PLY (`None` for a binary one): the line
+/// after `end_header`, plus the counts of the elements before it.
+pub(crate) fn first_line_of(data: &[u8], header: &Header, element: &str) -> Option<usize> {
+    if !matches!(header.encoding, Encoding::Ascii) {
+        return None;
+    }
+    let marker = b"end_header";
+    let at = data.windows(marker.len()).position(|w| w == marker)?;
+    let header_lines = data[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+    let mut first = header_lines + 1;
+    for (name, def) in &header.elements {
+        if name == element {
+            return Some(first);
+        }
+        first = first.saturating_add(def.count);
+    }
+    None
 }
 
 fn format_error(path: &Path, message: String) -> IoError {

@@ -113,6 +113,7 @@ pub(crate) fn parse_ele(
     let mut mesh = TetMeshData {
         tets: Vec::with_capacity(t.capacity_hint(n, 10)),
         tet_labels: Vec::with_capacity(t.capacity_hint(n, 10)),
+        tet_lines: Vec::with_capacity(t.capacity_hint(n, 10)),
         ..TetMeshData::default()
     };
     for i in 0..n {
@@ -150,6 +151,7 @@ pub(crate) fn parse_ele(
         )?;
         mesh.tets.push(tet);
         mesh.tet_labels.push(label);
+        mesh.tet_lines.push(line);
     }
     let mut skipped = Skipped::default();
     if per_tet == 10 {

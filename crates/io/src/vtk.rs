@@ -312,6 +312,7 @@ fn assemble(
                     t.error(format!("cell label {label} does not fit a 32-bit label"))
                 })?;
                 mesh.tet_labels.push(label);
+                mesh.tet_lines.push(line);
             }
             TRIANGLE => {
                 let raw: [u64; 3] = ids.try_into().map_err(|_| wrong(3))?;

@@ -208,3 +208,83 @@ fn io_errors_carry_the_path() {
         .to_string();
     assert!(msg.contains("/nonexistent/dir/m.mesh"), "{msg}");
 }
+
+#[test]
+fn surfaces_with_nan_or_infinite_coordinates_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    // OBJ: the file and the line (issue 17: `convert cube_nan.obj x.ply` exited 0).
+    let p = write(
+        d.path(),
+        "nan.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 nan 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
+    );
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(msg.contains("nan.obj:3: vertex 3"), "{msg}");
+    assert!(msg.contains("NaN/infinite"), "{msg}");
+    let p = write(
+        d.path(),
+        "inf.obj",
+        "v 0 0 0\nv 1 0 0\nv 0 1 -inf\nf 1 2 3\n",
+    );
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(msg.contains("inf.obj:3: "), "{msg}");
+    // Binary PLY: the vertex, counted from 1.
+    let vertices = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, f64::INFINITY, 0.0]];
+    let p = d.path().join("inf.ply");
+    write_surface(&p, &SurfaceRef::new(&vertices, &[[0, 1, 2]])).unwrap();
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("inf.ply") && msg.contains("vertex 3 of 3"),
+        "{msg}"
+    );
+    assert!(msg.contains("non-finite"), "{msg}");
+    // ASCII PLY: refused too, with a line.
+    let p = write(
+        d.path(),
+        "nan_ascii.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n",
+    );
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(msg.contains("nan_ascii.ply"), "{msg}");
+}
+
+#[test]
+fn obj_errors_name_the_line() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write(d.path(), "bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(msg.starts_with(&format!("{}:4: ", p.display())), "{msg}");
+    assert!(msg.contains("no vertex 7"), "{msg}");
+    let p = write(d.path(), "word.obj", "v 0 0 0\nv 1 zero 0\n");
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("word.obj:2: ") && msg.contains("\"zero\""),
+        "{msg}"
+    );
+}
+
+#[test]
+fn empty_surfaces_are_refused() {
+    let d = tempfile::tempdir().unwrap();
+    // Issue 17: an empty .obj converted to an empty PLY with exit 0.
+    let p = write(d.path(), "empty.obj", "");
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("empty.obj") && msg.contains("no vertices"),
+        "{msg}"
+    );
+    let p = write(d.path(), "points.obj", "# only points\nv 0 0 0\nv 1 0 0\n");
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("no faces") || msg.contains("no vertices"),
+        "{msg}"
+    );
+    let p = write(d.path(), "empty.off", "OFF\n0 0 0\n");
+    let msg = read_surface(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("empty.off") && msg.contains("no vertices"),
+        "{msg}"
+    );
+}

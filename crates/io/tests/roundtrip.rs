@@ -25,6 +25,41 @@ fn round_trip_all(mesh: &TetMeshData, what: &str) {
 }
 
 #[test]
+fn every_reader_records_the_line_of_each_tet() {
+    let dir = tempfile::tempdir().unwrap();
+    let mesh = small_mesh();
+    for (format, name) in FORMATS {
+        let path = dir.path().join(name);
+        write_tet_mesh(&path, &mesh, format).unwrap();
+        let back = read_tet_mesh(&path).unwrap();
+        assert_eq!(back.tet_lines.len(), back.tets.len(), "{format:?}");
+        // Each tet's line of the file the lines count in (the .ele for TetGen) lists its
+        // corners, as written: 1-based in every format but VTK and TetGen's 0-based files.
+        let text = std::fs::read_to_string(perifrac_io::tet_lines_file(&path)).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for (t, &line) in back.tet_lines.iter().enumerate() {
+            let numbers: Vec<u64> = lines[line - 1]
+                .split_whitespace()
+                .filter_map(|w| w.parse().ok())
+                .collect();
+            let corners = mesh.tets[t];
+            let listed = |base: u64| {
+                numbers.windows(4).any(|w| {
+                    w.iter()
+                        .zip(corners)
+                        .all(|(&a, c)| a == u64::from(c) + base)
+                })
+            };
+            assert!(
+                listed(0) || listed(1),
+                "{format:?}: tet {t} line {line}: {}",
+                lines[line - 1]
+            );
+        }
+    }
+}
+
+#[test]
 fn small_mesh_round_trips_bit_exactly() {
     round_trip_all(&small_mesh(), "small");
 }

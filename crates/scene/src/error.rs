@@ -63,6 +63,15 @@ pub enum SceneError {
         /// Why not.
         message: String,
     },
+    /// The run would pass a budget (memory, steps, output, wall time; see
+    /// [`crate::budget::Limits`]); the message quotes the estimate and the budget.
+    #[error("{file}: {message}")]
+    TooLarge {
+        /// The scene file.
+        file: PathBuf,
+        /// The estimate against the budget it passes.
+        message: String,
+    },
     /// Writing a frame failed.
     #[error(transparent)]
     Io(#[from] perifrac_io::IoError),

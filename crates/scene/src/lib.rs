@@ -19,6 +19,7 @@
 
 #![warn(missing_docs)]
 
+pub mod budget;
 pub mod driver;
 pub mod error;
 pub mod load;
@@ -27,6 +28,7 @@ pub mod run;
 pub mod schema;
 pub mod setup;
 
+pub use budget::{Limits, WorkEstimate};
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use load::Scene;

@@ -1,5 +1,6 @@
-//! The run directory: `scene.toml` (the scene as run), `run.json` (rewritten atomically after
-//! every frame, see [`RunManifest`]) and `frames/` with `surface_NNNN.ply` (binary PLY with the
+//! The run directory: `run.json` (written first, before anything else, then rewritten
+//! atomically after every frame and when the run stops, see [`RunManifest`]), `scene.toml` (the
+//! scene as run) and `frames/` with `surface_NNNN.ply` (binary PLY with the
 //! per-face `crack` flag), optionally `surface_NNNN.inc` (POV-Ray `mesh2` declaring
 //! [`POVRAY_MESH_NAME`]) and `particles_NNNN.ply` (points with `damage`, `mass` and
 //! `fragment`). Every file is written to a temporary name and renamed into place, so a reader
@@ -181,7 +182,9 @@ pub struct FrameWriter {
 
 impl FrameWriter {
     /// Prepares `dir`: removes what an earlier run left there (`run.json`, `scene.toml`,
-    /// `frames/`, `render/`) and nothing else, then writes `scene.toml`.
+    /// `frames/`, `render/`) and nothing else, writes the initial `run.json` (no frames, not
+    /// finished), then `scene.toml` and `frames/`; a failure after `run.json` is recorded in
+    /// it.
     pub fn create(
         dir: &Path,
         scene_path: &Path,
@@ -190,10 +193,7 @@ impl FrameWriter {
         driver: &Driver,
         options: OutputOptions,
     ) -> Result<FrameWriter, SceneError> {
-        let frames_dir = clear_output_dir(dir)?;
-        perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
-            w.write_all(scene_text.as_bytes())
-        })?;
+        clear_output_dir(dir)?;
         let manifest = RunManifest {
             format: RUN_FORMAT.into(),
             scene: scene_path
@@ -230,12 +230,30 @@ impl FrameWriter {
                 integrator: info.integrator.into(),
             }),
         };
-        Ok(FrameWriter {
+        let mut writer = FrameWriter {
             dir: dir.to_path_buf(),
-            frames_dir,
+            frames_dir: dir.join("frames"),
             options,
             manifest,
+        };
+        // run.json first: whatever fails after it is recorded in it.
+        writer.write_manifest()?;
+        let rest = perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
+            w.write_all(scene_text.as_bytes())
         })
+        .map_err(SceneError::from)
+        .and_then(|()| {
+            std::fs::create_dir_all(&writer.frames_dir).map_err(|e| SceneError::Output {
+                dir: dir.to_path_buf(),
+                message: format!("cannot create frames/: {e}"),
+            })
+        });
+        if let Err(e) = rest {
+            // Best effort: the error itself is what the caller reports.
+            let _ = writer.record_error(e.to_string());
+            return Err(e);
+        }
+        Ok(writer)
     }
 
     /// Writes frame `index` from the driver's current state and records it in `run.json`
@@ -333,10 +351,20 @@ impl FrameWriter {
             .expect("a frame was just pushed"))
     }
 
-    /// Records why the run stopped in `run.json`; the frames written stay.
+    /// Records why the run stopped in `run.json` (and that it did not finish); the frames
+    /// written stay. When the atomic rewrite fails (on a full disk it needs room for a second
+    /// copy), `run.json` is overwritten in place, which needs little more room than it had; the
+    /// first error is returned when that fails too.
     pub fn record_error(&mut self, message: String) -> Result<(), SceneError> {
         self.manifest.error = Some(message);
-        self.write_manifest()
+        self.manifest.finished = false;
+        match self.write_manifest() {
+            Ok(()) => Ok(()),
+            Err(first) => {
+                let text = self.manifest_text()?;
+                std::fs::write(self.dir.join("run.json"), text).map_err(|_| first)
+            }
+        }
     }
 
     /// Frames written so far, the initial one included.
@@ -349,22 +377,26 @@ impl FrameWriter {
         &self.manifest
     }
 
-    fn write_manifest(&self) -> Result<(), SceneError> {
-        let text =
+    /// `run.json`'s text, with its final newline.
+    fn manifest_text(&self) -> Result<String, SceneError> {
+        let mut text =
             serde_json::to_string_pretty(&self.manifest).map_err(|e| SceneError::Output {
                 dir: self.dir.clone(),
                 message: format!("cannot encode run.json: {e}"),
             })?;
-        perifrac_io::atomic_write(&self.dir.join("run.json"), |w| {
-            w.write_all(text.as_bytes())?;
-            w.write_all(b"\n")
-        })?;
+        text.push('\n');
+        Ok(text)
+    }
+
+    fn write_manifest(&self) -> Result<(), SceneError> {
+        let text = self.manifest_text()?;
+        perifrac_io::atomic_write(&self.dir.join("run.json"), |w| w.write_all(text.as_bytes()))?;
         Ok(())
     }
 }
 
-/// Removes an earlier run's files from `dir` (and nothing else) and creates `dir/frames`.
-fn clear_output_dir(dir: &Path) -> Result<PathBuf, SceneError> {
+/// Removes an earlier run's files from `dir` (and nothing else), creating `dir` if needed.
+fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
     let err = |message: String| SceneError::Output {
         dir: dir.to_path_buf(),
         message,
@@ -381,9 +413,8 @@ fn clear_output_dir(dir: &Path) -> Result<PathBuf, SceneError> {
             std::fs::remove_file(&p).map_err(|e| err(format!("cannot remove {name}: {e}")))?;
         }
     }
-    let frames = dir.join("frames");
-    std::fs::create_dir_all(&frames).map_err(|e| err(format!("cannot create: {e}")))?;
-    Ok(frames)
+    std::fs::create_dir_all(dir).map_err(|e| err(format!("cannot create: {e}")))?;
+    Ok(())
 }
 
 /// Mass (kg) of each of `count` pieces.

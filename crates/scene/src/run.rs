@@ -72,7 +72,8 @@ pub struct Summary {
 }
 
 /// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
-/// so far stay, `run.json` records the error, and [`SceneError::Stopped`] is returned.
+/// so far stay, `run.json` records the error, and [`SceneError::Stopped`] is returned; a
+/// failure to write a frame (a full disk, say) is recorded in `run.json` too and returned.
 pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summary, SceneError> {
     let Setup {
         scene_path,
@@ -84,7 +85,7 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
         info,
     } = setup;
     let mut writer = FrameWriter::create(dir, &scene_path, &scene_text, &info, &driver, output)?;
-    let total_steps = frames as u64 * steps_per_frame;
+    let total_steps = (frames as u64).saturating_mul(steps_per_frame);
     let mut progress = Progress {
         time: 0.0,
         duration: info.dt * total_steps as f64,
@@ -104,7 +105,8 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
                         frames: writer.frames_written(),
                         cause,
                     };
-                    writer.record_error(stopped.to_string())?;
+                    // Best effort: the stop is the error to report, recorded or not.
+                    let _ = writer.record_error(stopped.to_string());
                     return Err(stopped);
                 }
                 progress.steps += 1;
@@ -113,8 +115,18 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
                 observer.step(&progress);
             }
         }
-        let written = writer.write_frame(frame, &mut driver, frame == frames)?;
-        progress.fragments = written.fragments;
+        let written = writer
+            .write_frame(frame, &mut driver, frame == frames)
+            .map(|w| w.fragments);
+        let fragments = match written {
+            Ok(fragments) => fragments,
+            Err(e) => {
+                // Best effort, as above: the write error is what the caller reports.
+                let _ = writer.record_error(e.to_string());
+                return Err(e);
+            }
+        };
+        progress.fragments = fragments;
         progress.frames_written = frame + 1;
         observer.frame(&progress);
     }

@@ -30,6 +30,7 @@ pub fn small_mesh() -> TetMeshData {
         tet_labels: vec![3, 7],
         boundary_faces: vec![[0, 1, 2], [4, 2, 3]],
         skipped: vec![],
+        tet_lines: vec![],
     }
 }
 

@@ -8,6 +8,18 @@ use crate::schema::{Region, SceneFile};
 use super::defaults;
 use perifrac_physics::math::norm;
 
+/// `v` for a message: Rust's shortest digits that read back, with an exponent where the plain
+/// form would be long (`1e300`, not a 1 and 300 zeros; `2200`, not `2.2e3`).
+pub(crate) fn show(v: f64) -> String {
+    let plain = format!("{v}");
+    let exponent = format!("{v:e}");
+    if plain.len() > exponent.len() + 3 {
+        exponent
+    } else {
+        plain
+    }
+}
+
 /// The scene file a message names.
 pub(super) struct Ctx<'a> {
     /// The scene file.
@@ -29,14 +41,17 @@ impl Ctx<'_> {
         if v.is_finite() && v > 0.0 {
             Ok(v)
         } else {
-            Err(self.err(key, format!("{v} {unit} must be positive and finite")))
+            Err(self.err(
+                key,
+                format!("{} {unit} must be positive and finite", show(v)),
+            ))
         }
     }
     pub(super) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         if v.is_finite() && v >= 0.0 {
             Ok(v)
         } else {
-            Err(self.err(key, format!("{v} must be finite and >= 0")))
+            Err(self.err(key, format!("{} must be finite and >= 0", show(v))))
         }
     }
     pub(super) fn finite3(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
@@ -78,15 +93,20 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         if k > 6.0 {
             return Err(ctx.err(
                 "simulation.horizon_factor",
-                format!("{k} is far above the usual 1.0 to 2.0 (at most 6)"),
+                format!("{} is far above the usual 1.0 to 2.0 (at most 6)", show(k)),
             ));
         }
     }
     if let Some(s) = sim.safety {
         if !(s > 0.0 && s <= 1.0) {
-            return Err(ctx.err("simulation.safety", format!("{s} must be in (0, 1]")));
+            return Err(ctx.err(
+                "simulation.safety",
+                format!("{} must be in (0, 1]", show(s)),
+            ));
         }
     }
+    // A word other than "auto" is refused here, before the mesh and the stable step are made.
+    super::step::fixed_step(ctx, sim)?;
     if let Some(g) = sim.gravity {
         ctx.finite3("simulation.gravity", g)?;
     }
@@ -150,6 +170,27 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         }
         if let Some(d) = b.density {
             ctx.positive(&format!("{key}.density"), d, "kg/m^3")?;
+            // The mass is density times volume: name the value that makes it overflow.
+            let volume = 4.0 / 3.0 * std::f64::consts::PI * b.radius.powi(3);
+            if !volume.is_finite() {
+                return Err(ctx.err(
+                    format!("{key}.radius"),
+                    format!(
+                        "{} m is too large: the ball's volume overflows",
+                        show(b.radius)
+                    ),
+                ));
+            }
+            if !(d * volume).is_finite() {
+                return Err(ctx.err(
+                    format!("{key}.density"),
+                    format!(
+                        "{} kg/m^3 over a ball of radius {} m gives a mass that overflows",
+                        show(d),
+                        show(b.radius)
+                    ),
+                ));
+            }
         }
         check_contact(ctx, &key, b.stiffness_factor, b.damping_ratio, b.friction)?;
     }

@@ -51,7 +51,7 @@ pub(super) fn build_colliders(
         })
         .collect();
     let mut balls = Vec::new();
-    for b in &f.ball {
+    for (i, b) in f.ball.iter().enumerate() {
         let velocity = b.velocity.unwrap_or([0.0; 3]);
         let mass = b
             .mass
@@ -63,7 +63,19 @@ pub(super) fn build_colliders(
         let params = params(b.stiffness_factor, b.damping_ratio, b.friction);
         if let Some(m) = mass {
             let touching = 4.0 * ((b.radius + radius) / radius).powi(2);
-            stiffness.ball_omega2 = stiffness.ball_omega2.max(touching * params.stiffness / m);
+            let omega2 = touching * params.stiffness / m;
+            if !omega2.is_finite() {
+                return Err(ctx.err(
+                    format!("ball[{i}].radius"),
+                    format!(
+                        "{} m against contact spheres of {:.3e} m: the contacts the ball can \
+                         take at once, times their stiffness over its mass, overflow",
+                        super::check::show(b.radius),
+                        radius
+                    ),
+                ));
+            }
+            stiffness.ball_omega2 = stiffness.ball_omega2.max(omega2);
         }
         balls.push(BallDesc {
             center: b.center,

@@ -114,13 +114,34 @@ pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<&'static str, Scen
     Ok(chosen.map_or("chen", |(m, _)| m))
 }
 
+/// The stiffest modulus a material may have (Pa): a thousand times diamond's Young's modulus
+/// (about 1.1e12 Pa). Above it a value is a unit mistake, and products such as the contact
+/// stiffness (a modulus times a length) or `9 kappa mu` overflow for values near `f64::MAX`.
+pub(super) const MAX_MODULUS: f64 = 1e15;
+
+/// A modulus (Pa) at `key`: positive, finite and at most [`MAX_MODULUS`].
+fn modulus(ctx: &Ctx, key: &str, v: f64) -> Result<f64, SceneError> {
+    ctx.positive(key, v, "Pa")?;
+    if v > MAX_MODULUS {
+        return Err(ctx.err(
+            key,
+            format!(
+                "{} Pa is above {MAX_MODULUS:e} Pa, a thousand times diamond's stiffness (the \
+                 scene's units are SI: Pa, not kPa)",
+                super::check::show(v)
+            ),
+        ));
+    }
+    Ok(v)
+}
+
 /// `(kappa, mu)` (Pa) of `material[i]` from `young` + `poisson` or `bulk_modulus` +
-/// `shear_modulus`.
+/// `shear_modulus`, each at most [`MAX_MODULUS`].
 pub(super) fn elasticity(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<(f64, f64), SceneError> {
     let key = format!("material[{i}]");
     match (m.young, m.poisson, m.bulk_modulus, m.shear_modulus) {
         (Some(e), Some(nu), None, None) => {
-            ctx.positive(&format!("{key}.young"), e, "Pa")?;
+            modulus(ctx, &format!("{key}.young"), e)?;
             if !(nu > -1.0 && nu < 0.5) {
                 return Err(ctx.err(
                     format!("{key}.poisson"),
@@ -130,8 +151,8 @@ pub(super) fn elasticity(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<(f64, 
             Ok((e / (3.0 * (1.0 - 2.0 * nu)), e / (2.0 * (1.0 + nu))))
         }
         (None, None, Some(k), Some(mu)) => {
-            ctx.positive(&format!("{key}.bulk_modulus"), k, "Pa")?;
-            ctx.positive(&format!("{key}.shear_modulus"), mu, "Pa")?;
+            modulus(ctx, &format!("{key}.bulk_modulus"), k)?;
+            modulus(ctx, &format!("{key}.shear_modulus"), mu)?;
             Ok((k, mu))
         }
         _ => Err(ctx.err(

@@ -3,9 +3,12 @@
 
 use perifrac_physics::NO_NEIGHBOUR;
 use perifrac_topology::faces::FACE_CORNERS;
-use perifrac_topology::mesher::{cylinder_surface, mesh_surface, sphere_surface, MesherOptions};
+use perifrac_topology::mesher::{
+    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, MesherOptions,
+};
 use perifrac_topology::{primitives, TetMesh, NO_TET};
 
+use crate::budget::MeshShape;
 use crate::error::SceneError;
 use crate::load::Scene;
 use crate::schema::{PrecrackSpec, SceneFile};
@@ -13,8 +16,36 @@ use crate::schema::{PrecrackSpec, SceneFile};
 use super::check::Ctx;
 use super::defaults;
 
-/// The tet mesh the scene names, scaled and translated.
-pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError> {
+/// What the scene's object is made from, read and checked but not yet built: a box's counts,
+/// a surface to mesh, or a tet file's arrays.
+enum Source {
+    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids.
+    Box { size: [f64; 3], cells: [usize; 3] },
+    /// A closed surface for the built-in mesher (a round primitive's or a file's).
+    Surface {
+        vertices: Vec<[f64; 3]>,
+        faces: Vec<[u32; 3]>,
+    },
+    /// A tet mesh file and its arrays.
+    Tets {
+        path: std::path::PathBuf,
+        data: perifrac_io::TetMeshData,
+    },
+}
+
+/// The scene's object before it is built, with what the work estimate needs.
+pub(super) struct Planned {
+    source: Source,
+    /// Counts, mean edge and mean tet volume of the mesh it will be (estimated for a surface).
+    pub(super) shape: MeshShape,
+    scale: f64,
+    translate: [f64; 3],
+}
+
+/// Reads and checks the scene's `[mesh]` without building it: the primitive's sizes and cell
+/// counts (checked arithmetic, cells a tet mesh can have), a file's contents. Nothing in
+/// proportion to the mesh is allocated but a file's own arrays.
+pub(super) fn plan(ctx: &Ctx, scene: &Scene) -> Result<Planned, SceneError> {
     let m = &scene.file.mesh;
     let mesh_err = |message: String| SceneError::Mesh {
         file: scene.path.clone(),
@@ -27,16 +58,15 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
             return Err(ctx.err("mesh.resolution", "must be at least 1"));
         }
     }
-    let round = |vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>| {
-        let opts = MesherOptions {
-            edge_length: None,
-            resolution: m.resolution,
-        };
-        mesh_surface(&vertices, &faces, &opts)
-            .map(|o| (o.vertices, o.tets))
-            .map_err(|e| mesh_err(e.to_string()))
+    let opts = MesherOptions {
+        edge_length: None,
+        resolution: m.resolution,
     };
-    let (mut vertices, tets) = match (m.primitive.as_deref(), &m.file) {
+    let surface = |vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>| {
+        let shape = MeshShape::of_bcc(estimated_tets(&vertices, &opts));
+        (Source::Surface { vertices, faces }, shape)
+    };
+    let (source, shape) = match (m.primitive.as_deref(), &m.file) {
         (Some(_), Some(_)) => {
             return Err(ctx.err("mesh", "give either primitive or file, not both"))
         }
@@ -53,7 +83,7 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
             for (k, &s) in size.iter().enumerate() {
                 ctx.positive(&format!("mesh.size[{k}]"), s, "m")?;
             }
-            let cells = match (m.cells, m.resolution) {
+            let (cells, cells_key) = match (m.cells, m.resolution) {
                 (Some(_), Some(_)) => {
                     return Err(ctx.err("mesh", "give either cells or resolution, not both"))
                 }
@@ -61,16 +91,21 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
                     if c.contains(&0) {
                         return Err(ctx.err("mesh.cells", format!("{c:?}: counts must be >= 1")));
                     }
-                    c
+                    (c, "mesh.cells")
                 }
-                (None, r) => {
-                    primitives::cells_for_resolution(size, r.unwrap_or(defaults::BOX_RESOLUTION))
-                }
+                (None, r) => (
+                    primitives::cells_for_resolution(size, r.unwrap_or(defaults::BOX_RESOLUTION)),
+                    "mesh.resolution",
+                ),
             };
-            if cells.iter().product::<usize>() > 20_000_000 {
-                return Err(ctx.err("mesh.cells", format!("{cells:?} is too many cells")));
-            }
-            primitives::box_data([0.0; 3], size, cells)
+            let counts =
+                primitives::box_counts(cells).map_err(|e| ctx.err(cells_key, e.to_string()))?;
+            // The box as it will stand, scaled: its cells must make tets with a volume.
+            let scaled = size.map(|s| s * scale);
+            primitives::check_box([0.0; 3], scaled, cells)
+                .map_err(|e| ctx.err("mesh.size", format!("{size:?} m in {cells:?} cells: {e}")))?;
+            let cell: [f64; 3] = std::array::from_fn(|k| scaled[k] / cells[k] as f64);
+            (Source::Box { size, cells }, MeshShape::of_box(cell, counts))
         }
         (Some("sphere"), None) => {
             let r = ctx.positive(
@@ -80,7 +115,7 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
                 "m",
             )?;
             let (v, f) = sphere_surface(r, defaults::ROUND_SEGMENTS);
-            round(v, f)?
+            surface(v, f)
         }
         (Some("cylinder"), None) => {
             let r = m
@@ -92,7 +127,7 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
             ctx.positive("mesh.radius", r, "m")?;
             ctx.positive("mesh.height", h, "m")?;
             let (v, f) = cylinder_surface(r, h, 2 * defaults::ROUND_SEGMENTS);
-            round(v, f)?
+            surface(v, f)
         }
         (Some(other), None) => {
             return Err(ctx.err(
@@ -102,6 +137,12 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
         }
         (None, Some(file)) => {
             let path = scene.base_dir().join(file);
+            if path.is_dir() {
+                return Err(ctx.err(
+                    "mesh.file",
+                    format!("{} is a directory, not a mesh file", path.display()),
+                ));
+            }
             if !path.is_file() {
                 return Err(ctx.err("mesh.file", format!("{} not found", path.display())));
             }
@@ -111,11 +152,51 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
                 .unwrap_or_default();
             if matches!(ext.as_str(), "obj" | "off" | "ply") {
                 let s = perifrac_io::read_surface(&path).map_err(|e| mesh_err(e.to_string()))?;
-                round(s.vertices, s.faces)?
+                surface(s.vertices, s.faces)
             } else {
-                let d = perifrac_io::read_tet_mesh(&path).map_err(|e| mesh_err(e.to_string()))?;
-                (d.vertices, d.tets)
+                let data =
+                    perifrac_io::read_tet_mesh(&path).map_err(|e| mesh_err(e.to_string()))?;
+                let shape = MeshShape::of_tets(&data.vertices, &data.tets);
+                (Source::Tets { path, data }, shape)
             }
+        }
+    };
+    Ok(Planned {
+        source,
+        shape,
+        scale,
+        translate,
+    })
+}
+
+/// Builds the mesh `plan` read: meshes a surface, makes a box, scales and translates, and
+/// validates the tets (a problem in a tet file names its line, tets counted from 1).
+pub(super) fn build(scene: &Scene, planned: Planned) -> Result<TetMesh, SceneError> {
+    let mesh_err = |message: String| SceneError::Mesh {
+        file: scene.path.clone(),
+        message,
+    };
+    let Planned {
+        source,
+        scale,
+        translate,
+        ..
+    } = planned;
+    let mut lines = None;
+    let (mut vertices, tets) = match source {
+        Source::Box { size, cells } => primitives::box_data([0.0; 3], size, cells),
+        Source::Surface { vertices, faces } => {
+            let opts = MesherOptions {
+                edge_length: None,
+                resolution: scene.file.mesh.resolution,
+            };
+            mesh_surface(&vertices, &faces, &opts)
+                .map(|o| (o.vertices, o.tets))
+                .map_err(|e| mesh_err(e.to_string()))?
+        }
+        Source::Tets { path, data } => {
+            lines = Some((perifrac_io::tet_lines_file(&path), data.tet_lines));
+            (data.vertices, data.tets)
         }
     };
     for v in &mut vertices {
@@ -125,7 +206,10 @@ pub(super) fn build_mesh(ctx: &Ctx, scene: &Scene) -> Result<TetMesh, SceneError
     }
     TetMesh::new(vertices, tets)
         .map(|(mesh, _)| mesh)
-        .map_err(|e| mesh_err(e.to_string()))
+        .map_err(|e| match &lines {
+            Some((file, lines)) => mesh_err(e.located(file, lines)),
+            None => mesh_err(e.to_string()),
+        })
 }
 
 /// Cuts the scene's initial cracks into `mesh` (and splits its vertices). Returns the face

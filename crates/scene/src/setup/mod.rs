@@ -17,6 +17,7 @@ use std::path::PathBuf;
 
 use perifrac_physics::{Discretization, PhysicsError};
 
+use crate::budget::{self, Limits, MeshShape, WorkEstimate};
 use crate::driver::Driver;
 use crate::error::SceneError;
 use crate::load::Scene;
@@ -101,6 +102,9 @@ pub struct SetupInfo {
     pub model: &'static str,
     /// The integrator (`"explicit"`, `"implicit"`).
     pub integrator: &'static str,
+    /// The work estimate the run was checked against: memory from the counted bonds, steps,
+    /// output and wall time.
+    pub estimate: WorkEstimate,
 }
 
 /// A scene ready to run.
@@ -123,9 +127,28 @@ pub struct Setup {
 
 impl Setup {
     /// Validates and builds everything `scene` asks for; `frames` overrides the scene's frame
-    /// count.
+    /// count. Refuses a run past the default budgets on this machine
+    /// ([`Limits::for_this_machine`]); see [`Setup::with_limits`].
     pub fn new(scene: &Scene, frames: Option<usize>) -> Result<Setup, SceneError> {
+        Setup::with_limits(scene, frames, &Limits::for_this_machine())
+    }
+
+    /// [`Setup::new`] against `limits`: the memory a run needs is estimated before the mesh
+    /// and again before the bond families are built, its steps, output and wall time once the
+    /// step is known (and earlier where the frame count or the contact travel limit alone
+    /// pass the budget), and a run past a budget is refused with [`SceneError::TooLarge`]
+    /// quoting the estimate, unless `limits.allow_large`. The estimate is kept in
+    /// [`SetupInfo::estimate`].
+    pub fn with_limits(
+        scene: &Scene,
+        frames: Option<usize>,
+        limits: &Limits,
+    ) -> Result<Setup, SceneError> {
         let ctx = Ctx { file: &scene.path };
+        let too_large = |message: String| SceneError::TooLarge {
+            file: scene.path.clone(),
+            message,
+        };
         let f = &scene.file;
         check::check_settings(&ctx, f)?;
         let kind = solver::kind(&ctx, &f.simulation)?;
@@ -136,14 +159,46 @@ impl Setup {
                  model = \"xu\" (Chen's elastoplastic model steps explicitly)",
             ));
         }
+        let implicit = kind == solver::Kind::Implicit;
         let physics = |cause: PhysicsError| ctx.physics(cause);
+        let sim = &f.simulation;
+        let frames = frames
+            .or(f.output.frames)
+            .unwrap_or(defaults::FRAMES)
+            .max(1);
+        // Every frame takes at least one step: refused before any mesh is made.
+        limits
+            .check_steps(
+                frames as u64,
+                &format!("{frames} frames of at least one step"),
+            )
+            .map_err(too_large)?;
+        let horizon_factor = sim.horizon_factor.unwrap_or(defaults::HORIZON_FACTOR);
 
-        let mut mesh = mesh::build_mesh(&ctx, scene)?;
+        // Memory, from the mesh spec, before the mesh is built.
+        let planned = mesh::plan(&ctx, scene)?;
+        let planned_shape = planned.shape;
+        limits
+            .check_memory(&WorkEstimate::of_mesh(
+                planned_shape,
+                horizon_factor,
+                implicit,
+            ))
+            .map_err(too_large)?;
+        let mut mesh = mesh::build(scene, planned)?;
         let rest = mesh.rest_barycentres();
         let volumes = mesh.rest_volumes();
         let edge = mesh.mean_edge_length();
-        let sim = &f.simulation;
-        let horizon = sim.horizon_factor.unwrap_or(defaults::HORIZON_FACTOR) * edge;
+        let horizon = horizon_factor * edge;
+        // Memory again, from the built mesh, before the bond families are.
+        let built = MeshShape {
+            tets: rest.len() as u64,
+            vertices: mesh.num_vertices() as u64,
+            mean_edge: edge,
+            mean_volume: volumes.iter().sum::<f64>() / volumes.len().max(1) as f64,
+        };
+        let estimate = WorkEstimate::of_mesh(built, horizon_factor, implicit);
+        limits.check_memory(&estimate).map_err(too_large)?;
 
         let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
@@ -151,6 +206,7 @@ impl Setup {
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
         disc.set_materials(&ids).map_err(physics)?;
         let mut model = solver::model(&ctx, sim, disc, &materials)?;
+        let mut estimate = estimate.with_bonds(report.bonds as u64, implicit);
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;
@@ -163,33 +219,92 @@ impl Setup {
         let contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
 
         let velocities = loads::initial_velocities(&ctx, f, &rest)?;
-        let dt_limit = step::stable_limit(model.as_dyn(), &rest, horizon, contact);
         let travel = |fraction| {
             colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
                 step::travel_limit(c, mean_radius, &velocities, fraction)
             })
         };
-        let frames = frames
-            .or(f.output.frames)
-            .unwrap_or(defaults::FRAMES)
-            .max(1);
-        let (dt_wanted, travel_limit) = match kind {
-            solver::Kind::Explicit => {
-                let travel_limit = travel(defaults::TRAVEL_FRACTION);
-                (
-                    step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
-                    travel_limit,
-                )
-            }
-            solver::Kind::Implicit => {
-                let travel_limit = travel(defaults::IMPLICIT_TRAVEL_FRACTION);
-                (
-                    step::implicit_step(&ctx, sim, frames, travel_limit)?,
-                    travel_limit,
-                )
-            }
+        let travel_fraction = match kind {
+            solver::Kind::Explicit => defaults::TRAVEL_FRACTION,
+            solver::Kind::Implicit => defaults::IMPLICIT_TRAVEL_FRACTION,
+        };
+        let travel_limit = travel(travel_fraction);
+        // A fixed step, or "auto"'s bound by the travel limit, already gives a least step
+        // count: refused before the stable step's power iteration when that passes the budget.
+        let (early_dt, why) = match step::fixed_step(&ctx, sim)? {
+            Some(dt) => (dt, format!("dt = {} s", check::show(dt))),
+            None => (
+                travel_limit,
+                format!(
+                    "the contact travel limit allows {travel_limit:.3e} s per step, the \
+                     fastest ball or particle moving {travel_fraction} of a contact radius"
+                ),
+            ),
+        };
+        let at_least = step::fit_to_frames(sim.duration, frames, early_dt).1;
+        limits
+            .check_steps(
+                (frames as u64).saturating_mul(at_least),
+                &format!("{frames} frame(s) of at least {at_least} steps: {why}"),
+            )
+            .map_err(too_large)?;
+        let dt_limit = step::stable_limit(model.as_dyn(), &rest, horizon, contact);
+        let dt_wanted = match kind {
+            solver::Kind::Explicit => step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
+            solver::Kind::Implicit => step::implicit_step(&ctx, sim, frames, travel_limit)?,
         };
         let (dt, steps_per_frame) = step::fit_to_frames(sim.duration, frames, dt_wanted);
+
+        // Steps, output and wall time, now that the step is known.
+        let output = output_options(f);
+        estimate.steps = (frames as u64).saturating_mul(steps_per_frame);
+        limits
+            .check_steps(
+                estimate.steps,
+                &format!(
+                    "{frames} frame(s) of {steps_per_frame} steps of {dt:.3e} s over {} s; the \
+                     stable limit is {dt_limit:.3e} s{}",
+                    check::show(sim.duration),
+                    if travel_limit.is_finite() {
+                        format!(", the contact travel limit {travel_limit:.3e} s")
+                    } else {
+                        String::new()
+                    }
+                ),
+            )
+            .map_err(too_large)?;
+        let per_frame = budget::frame_bytes(
+            mesh.boundary_face_count() as u64,
+            rest.len() as u64,
+            output.povray,
+            output.particles,
+        );
+        estimate.output_bytes = per_frame.saturating_mul(frames as u64 + 1);
+        limits
+            .check_output(
+                estimate.output_bytes,
+                &format!(
+                    "{} frames of at least {} each",
+                    frames + 1,
+                    budget::bytes(per_frame)
+                ),
+            )
+            .map_err(too_large)?;
+        estimate.seconds =
+            budget::run_seconds(estimate.steps, estimate.bonds, limits.threads, implicit);
+        limits
+            .check_time(
+                estimate.seconds,
+                &format!(
+                    "{} steps over {} bonds at {:.0} ns per bond update on one core, {} \
+                     thread(s)",
+                    budget::count(estimate.steps),
+                    budget::count(estimate.bonds),
+                    budget::SECONDS_PER_BOND_UPDATE * 1e9,
+                    limits.threads
+                ),
+            )
+            .map_err(too_large)?;
 
         let (loads, releases) = loads::loads(&ctx, f, &rest, gravity)?;
         let start = solver::Start {
@@ -215,6 +330,7 @@ impl Setup {
             up: math::up_from_gravity(gravity),
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
+            estimate,
         };
         let driver = Driver::new(mesh, solver, colliders.map(|(c, _)| c), radii, releases);
         Ok(Setup {
@@ -223,7 +339,7 @@ impl Setup {
             driver,
             frames,
             steps_per_frame,
-            output: output_options(f),
+            output,
             info,
         })
     }

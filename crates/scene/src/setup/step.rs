@@ -51,7 +51,7 @@ pub(super) fn travel_limit(
 
 /// The scene's `dt`: `None` for `"auto"` (or no `dt`), a positive number of seconds, or an
 /// error for anything else.
-fn fixed_step(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>, SceneError> {
+pub(super) fn fixed_step(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>, SceneError> {
     match &sim.dt {
         None => Ok(None),
         Some(DtSpec::Word(w)) if w == "auto" => Ok(None),
@@ -114,9 +114,13 @@ pub(super) fn implicit_step(
 
 /// The step (s) and steps per frame: frames fall exactly on steps, and the step is at most
 /// `wanted` (s).
+///
+/// `steps_per_frame` saturates at `u64::MAX` for a step far below the frame (or a zero one);
+/// the step budget refuses such a run.
 pub(super) fn fit_to_frames(duration: f64, frames: usize, wanted: f64) -> (f64, u64) {
     let frame_dt = duration / frames as f64;
-    let steps_per_frame = (frame_dt / wanted).ceil().max(1.0) as u64;
+    // `as` saturates, and takes NaN to 0 (then 1).
+    let steps_per_frame = ((frame_dt / wanted).ceil() as u64).max(1);
     (frame_dt / steps_per_frame as f64, steps_per_frame)
 }
 

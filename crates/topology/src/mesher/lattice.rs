@@ -14,9 +14,13 @@ pub struct BccLattice {
 }
 
 impl BccLattice {
-    /// A lattice of cube side `h` covering `lo..hi` with one spare cube on every side.
+    /// A lattice of cube side `h` covering `lo..hi` with one spare cube on every side. The
+    /// counts saturate at `usize::MAX` for a spacing far below the extent, so that
+    /// [`BccLattice::num_points`] reports an impossible lattice instead of wrapping.
     pub fn covering(lo: [f64; 3], hi: [f64; 3], h: f64) -> Self {
-        let cells = [0, 1, 2].map(|k| ((hi[k] - lo[k]) / h).ceil().max(1.0) as usize + 2);
+        // `as` saturates (and takes NaN to 0); the `+ 2` saturates too.
+        let cells =
+            [0, 1, 2].map(|k| (((hi[k] - lo[k]) / h).ceil().max(1.0) as usize).saturating_add(2));
         let origin = [0, 1, 2].map(|k| {
             let span = cells[k] as f64 * h;
             0.5 * (lo[k] + hi[k]) - 0.5 * span
@@ -24,13 +28,16 @@ impl BccLattice {
         Self { origin, h, cells }
     }
 
-    /// Number of lattice points (corners then centres).
+    /// Number of lattice points (corners then centres), saturating at `usize::MAX`.
     pub fn num_points(&self) -> usize {
-        self.num_corners() + self.cells.iter().product::<usize>()
+        let centres = self.cells.iter().fold(1usize, |a, &c| a.saturating_mul(c));
+        self.num_corners().saturating_add(centres)
     }
 
     fn num_corners(&self) -> usize {
-        self.cells.iter().map(|c| c + 1).product()
+        self.cells
+            .iter()
+            .fold(1usize, |a, &c| a.saturating_mul(c.saturating_add(1)))
     }
 
     /// Index of corner `(i, j, k)`.
@@ -138,5 +145,14 @@ mod tests {
         // 3 axes x 2 x 3 x 3 neighbour pairs x 4 tets, each h^3 / 12.
         assert_eq!(count, 3 * 18 * 4);
         assert!((volume - count as f64 * 0.125 / 12.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn an_absurdly_fine_spacing_saturates_instead_of_wrapping() {
+        let lat = BccLattice::covering([0.0; 3], [1.0; 3], 1e-300);
+        assert_eq!(lat.num_points(), usize::MAX);
+        let lat = BccLattice::covering([0.0; 3], [1.0; 3], 0.5);
+        // 2 cubes plus a spare on each side: 4^3 centres and 5^3 corners.
+        assert_eq!(lat.num_points(), 64 + 125);
     }
 }

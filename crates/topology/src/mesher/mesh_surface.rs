@@ -114,6 +114,34 @@ pub enum MesherError {
     },
 }
 
+/// An upper estimate of the tets [`mesh_surface`] makes of a surface with these vertices, made
+/// before anything is allocated: a BCC lattice of spacing `h` has 12 tets per `h^3`, and the
+/// solid fills at most its bounding box (each side taken as at least `h`); a sphere fills about
+/// half of it, so the estimate is up to about twice the count for round shapes. About
+/// [`DEFAULT_TARGET_TETS`] when neither option is given, and 0 for options `mesh_surface`
+/// refuses anyway.
+pub fn estimated_tets(vertices: &[[f64; 3]], opts: &MesherOptions) -> f64 {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in vertices.iter().filter(|p| p.iter().all(|x| x.is_finite())) {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let extent = [0, 1, 2].map(|k| (hi[k] - lo[k]).max(0.0));
+    let h = match (opts.edge_length, opts.resolution) {
+        (None, None) => return DEFAULT_TARGET_TETS,
+        (Some(l), None) => l,
+        (None, Some(n)) if n > 0 => extent.iter().cloned().fold(0.0, f64::max) / n as f64,
+        _ => return 0.0,
+    };
+    if !(h.is_finite() && h > 0.0) {
+        return 0.0;
+    }
+    12.0 * extent.iter().map(|&e| e.max(h) / h).product::<f64>()
+}
+
 /// Meshes the solid bounded by the triangle surface `faces` on `vertices`.
 pub fn mesh_surface(
     vertices: &[[f64; 3]],

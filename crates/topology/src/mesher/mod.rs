@@ -17,7 +17,8 @@ pub mod winding;
 
 pub use fragments::FragmentReport;
 pub use mesh_surface::{
-    mesh_surface, MesherError, MesherOptions, MesherOutput, MesherReport, DEFAULT_TARGET_TETS,
+    estimated_tets, mesh_surface, MesherError, MesherOptions, MesherOutput, MesherReport,
+    DEFAULT_TARGET_TETS,
 };
 pub use shapes::{cube_surface, cylinder_surface, sphere_surface};
 pub use snap::SnapReport;

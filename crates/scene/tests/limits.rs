@@ -1,0 +1,250 @@
+//! Scenes that could never finish, or never fit, are refused with the estimate before the work
+//! starts; impossible sizes are errors, not aborts; messages name the key at fault; a run that
+//! cannot write its frames records why in `run.json`, which is the first file it writes.
+
+use std::path::Path;
+
+use perifrac_scene::{run, Limits, Observer, Progress, Scene, SceneError, Setup, Silent};
+
+/// A 2 x 2 x 2-cell cube of soft rubber-like material: a few steps per frame, set up in
+/// milliseconds.
+const TINY: &str = "[mesh]\nprimitive = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = [2, 2, 2]\n\n\
+    [[material]]\nyoung = 1e7\npoisson = 0.25\ndensity = 1000.0\n\n\
+    [simulation]\nduration = 1e-4\n\n[output]\nframes = 2\n";
+
+/// The default scene's slab (60 x 60 x 6 cm of glass) at 12 x 12 x 2 cells with its steel ball
+/// 1 cm above: no step is taken before the checks below.
+const SLAB: &str = "[mesh]\nprimitive = \"box\"\nsize = [0.6, 0.6, 0.06]\ncells = [12, 12, 2]\n\n\
+    [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
+    s_crit = 0.0005\n\n[simulation]\nduration = 0.005\n\n\
+    [[ball]]\ncenter = [0.3, 0.3, 0.12]\nradius = 0.05\nvelocity = [0.0, 0.0, -75.0]\n\
+    density = 7800.0\n";
+
+fn scene(text: &str) -> Scene {
+    Scene::parse(text, Path::new("s.toml")).unwrap()
+}
+
+/// Budgets that do not depend on the machine: 64 GB of memory, two threads.
+fn limits() -> Limits {
+    Limits {
+        memory_bytes: 64_000_000_000,
+        memory_source: "the test's budget".into(),
+        threads: 2,
+        ..Limits::for_this_machine()
+    }
+}
+
+fn refusal(text: &str) -> SceneError {
+    match Setup::with_limits(&scene(text), None, &limits()) {
+        Ok(_) => panic!("the scene should be refused:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+/// The message of a refusal, checked to be a [`SceneError::TooLarge`].
+fn too_large(text: &str) -> String {
+    let e = refusal(text);
+    assert!(matches!(e, SceneError::TooLarge { .. }), "{e:?}");
+    e.to_string()
+}
+
+#[test]
+fn a_mesh_too_big_for_memory_is_refused_before_it_is_built() {
+    // Issue 17: cells = [271, 271, 271] grew to 7 GB over 228 s and aborted. Refused from the
+    // cell counts alone (building it would take minutes and far more than 64 GB).
+    let msg = too_large(&TINY.replace("cells = [2, 2, 2]", "cells = [271, 271, 271]"));
+    assert!(msg.contains("of memory"), "{msg}");
+    assert!(
+        msg.contains(&format!("{} particles", 6 * 271 * 271 * 271)),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("64.0 GB available (the test's budget)"),
+        "{msg}"
+    );
+    // The same scene goes on past the budget only when asked; the counts that a mesh cannot
+    // index at all are refused anyway (below).
+    let allowed = Limits {
+        allow_large: true,
+        ..limits()
+    };
+    let text = TINY.replace("cells = [2, 2, 2]", "cells = [4294967296, 4294967296, 1]");
+    match Setup::with_limits(&scene(&text), None, &allowed) {
+        Err(SceneError::Invalid { key, message, .. }) => {
+            assert_eq!(key, "mesh.cells");
+            assert!(message.contains("more than a mesh can index"), "{message}");
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("4294967296 x 4294967296 cells were accepted"),
+    }
+}
+
+#[test]
+fn runs_that_never_finish_are_refused_with_their_step_count() {
+    // frames = 1000000000: at least a step per frame.
+    let msg = too_large(&TINY.replace("frames = 2", "frames = 1000000000"));
+    assert!(
+        msg.contains("1.000e9 steps") && msg.contains("budget of 1.000e8 steps"),
+        "{msg}"
+    );
+    // duration = 1e6: 3.65e11 steps in issue 17's scene.
+    let msg = too_large(&TINY.replace("duration = 1e-4", "duration = 1e6"));
+    assert!(
+        msg.contains("steps") && msg.contains("the stable limit is"),
+        "{msg}"
+    );
+    // A ball at -1e12 m/s: refused from the contact travel limit, before the stable step.
+    let msg = too_large(&SLAB.replace(
+        "velocity = [0.0, 0.0, -75.0]",
+        "velocity = [0.0, 0.0, -1e12]",
+    ));
+    assert!(msg.contains("contact travel limit"), "{msg}");
+    // A fixed step far below what the frames need.
+    let msg = too_large(&TINY.replace("duration = 1e-4", "duration = 1e-4\ndt = 1e-15"));
+    assert!(msg.contains("dt = 1e-15 s"), "{msg}");
+}
+
+#[test]
+fn output_and_run_time_budgets_are_checked() {
+    let small = Limits {
+        max_output_bytes: 1_000,
+        ..limits()
+    };
+    let e = Setup::with_limits(&scene(TINY), None, &small)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("budget of 1.0 kB"), "{e}");
+    let short = Limits {
+        max_seconds: 1e-9,
+        ..limits()
+    };
+    let e = Setup::with_limits(&scene(TINY), None, &short)
+        .err()
+        .unwrap();
+    assert!(e.to_string().contains("ns per bond update"), "{e}");
+}
+
+#[test]
+fn the_estimate_is_kept_for_the_setup_line() {
+    let setup = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    let e = setup.info.estimate;
+    assert_eq!(e.particles, 48);
+    assert_eq!(e.bonds, setup.info.bonds as u64);
+    assert_eq!(e.steps, setup.frames as u64 * setup.steps_per_frame);
+    assert!(
+        e.memory_bytes > 48 * 600 && e.output_bytes > 0 && e.seconds > 0.0,
+        "{e:?}"
+    );
+    assert!(e.to_string().starts_with("estimated "), "{e}");
+}
+
+#[test]
+fn messages_name_the_key_at_fault() {
+    let invalid = |text: &str| match refusal(text) {
+        SceneError::Invalid { key, message, .. } => (key, message),
+        e => panic!("{e:?}"),
+    };
+    // dt = "fast" is refused with the settings, before the mesh: here a mesh that would take
+    // minutes and more memory than allowed to build.
+    let (key, message) = invalid(
+        &TINY
+            .replace("duration = 1e-4", "duration = 1e-4\ndt = \"fast\"")
+            .replace("cells = [2, 2, 2]", "cells = [271, 271, 271]"),
+    );
+    assert_eq!(key, "simulation.dt");
+    assert!(message.contains("\"fast\""), "{message}");
+    // horizon_factor = 1e300 is shown as 1e300, not as 301 digits.
+    let (key, message) =
+        invalid(&TINY.replace("duration = 1e-4", "duration = 1e-4\nhorizon_factor = 1e300"));
+    assert_eq!(key, "simulation.horizon_factor");
+    assert!(message.starts_with("1e300 is far above"), "{message}");
+    // bulk_modulus = 1e300 is the material's key, not a ball stiffness.
+    let (key, message) = invalid(&SLAB.replace("bulk_modulus = 3.3e10", "bulk_modulus = 1e300"));
+    assert_eq!(key, "material[0].bulk_modulus");
+    assert!(message.contains("1e300 Pa is above 1e15 Pa"), "{message}");
+    // A ball radius of 1e300 is the radius, not a mass.
+    let (key, message) = invalid(&SLAB.replace("radius = 0.05", "radius = 1e300"));
+    assert_eq!(key, "ball[0].radius");
+    assert!(message.contains("1e300 m"), "{message}");
+    // A directory given as the mesh says so.
+    let dir = tempfile::tempdir().unwrap();
+    let text = TINY.replace(
+        "primitive = \"box\"\nsize = [0.1, 0.1, 0.1]\ncells = [2, 2, 2]",
+        &format!("file = \"{}\"", dir.path().display()),
+    );
+    let (key, message) = invalid(&text);
+    assert_eq!(key, "mesh.file");
+    assert!(message.contains("is a directory"), "{message}");
+    // Box sizes whose cells cannot make tets.
+    let (key, message) = invalid(&TINY.replace("size = [0.1, 0.1, 0.1]", "size = [1e8, 1.0, 1.0]"));
+    assert_eq!(key, "mesh.size");
+    assert!(message.contains("too flat"), "{message}");
+}
+
+#[test]
+fn a_ball_inside_the_slab_is_reported_by_its_deepest_particle() {
+    // Issue 17: the ball's bottom 3 cm inside the 6 cm slab was reported by the lowest-index
+    // particle touching it (1.6e-4 m deep).
+    let e = refusal(&SLAB.replace("center = [0.3, 0.3, 0.12]", "center = [0.3, 0.3, 0.08]"));
+    let msg = e.to_string();
+    assert!(msg.contains("inside ball 0"), "{msg}");
+    let depth: f64 = msg
+        .split(" starts ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|d| d.parse().ok())
+        .unwrap_or_else(|| panic!("no depth in {msg}"));
+    // The particles nearest the ball's centre reach about 2.5 cm into it (1.7 cm of the
+    // barycentre, plus the contact radius capped at the top surface); the first particle
+    // found touching it reached a fraction of a millimetre.
+    assert!((0.01..0.06).contains(&depth), "{msg}");
+}
+
+/// After frame 0, puts a regular file where `frames/` was, so that writing frame 1 fails (for
+/// root too): a disk that fills up mid-run, without filling a disk.
+struct BlockFrames<'a>(&'a Path);
+
+impl Observer for BlockFrames<'_> {
+    fn frame(&mut self, progress: &Progress) {
+        if progress.frames_written == 1 {
+            let frames = self.0.join("frames");
+            std::fs::remove_dir_all(&frames).unwrap();
+            std::fs::write(&frames, b"").unwrap();
+        }
+    }
+}
+
+fn run_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn a_frame_that_cannot_be_written_is_recorded_in_run_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let setup = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    let e = run(setup, &dir, &mut BlockFrames(&dir)).err().unwrap();
+    let msg = e.to_string();
+    // The final file, not its temporary name.
+    assert!(msg.contains("/frames/surface_0001.ply: "), "{msg}");
+    let manifest = run_json(&dir);
+    assert_eq!(manifest["finished"], false);
+    assert_eq!(manifest["error"].as_str(), Some(msg.as_str()));
+    assert_eq!(manifest["frames"].as_array().unwrap().len(), 1);
+}
+
+#[test]
+fn run_json_is_written_first_and_records_what_stopped_the_start() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    std::fs::create_dir_all(&dir).unwrap();
+    // A file where frames/ goes: the run cannot start writing frames.
+    std::fs::write(dir.join("frames"), b"").unwrap();
+    let setup = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    let e = run(setup, &dir, &mut Silent).err().unwrap();
+    assert!(e.to_string().contains("frames/"), "{e}");
+    let manifest = run_json(&dir);
+    assert_eq!(manifest["finished"], false);
+    assert_eq!(manifest["error"].as_str(), Some(e.to_string().as_str()));
+    assert!(manifest["frames"].as_array().unwrap().is_empty());
+}
