@@ -162,6 +162,13 @@ fn messages_name_the_key_at_fault() {
     let (key, message) = invalid(&SLAB.replace("bulk_modulus = 3.3e10", "bulk_modulus = 1e300"));
     assert_eq!(key, "material[0].bulk_modulus");
     assert!(message.contains("1e300 Pa is above 1e15 Pa"), "{message}");
+    // A density of 1e300 is refused as the density, for a material and for a ball.
+    let (key, message) = invalid(&SLAB.replace("density = 2200.0", "density = 1e300"));
+    assert_eq!(key, "material[0].density");
+    assert!(message.contains("1e300 kg/m^3 is above 1e6"), "{message}");
+    let (key, message) = invalid(&SLAB.replace("density = 7800.0", "density = 2e6"));
+    assert_eq!(key, "ball[0].density");
+    assert!(message.contains("kg/m^3 is above 1e6"), "{message}");
     // A ball radius of 1e300 is the radius, not a mass.
     let (key, message) = invalid(&SLAB.replace("radius = 0.05", "radius = 1e300"));
     assert_eq!(key, "ball[0].radius");

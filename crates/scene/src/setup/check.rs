@@ -8,6 +8,11 @@ use crate::schema::{Region, SceneFile};
 use super::defaults;
 use perifrac_physics::math::norm;
 
+/// Densest value a material or ball may have (kg/m^3): over 40 times osmium's 22,590, far
+/// beyond any solid, so a larger one is a unit slip; it keeps masses and momenta far from
+/// overflow.
+pub(super) const MAX_DENSITY: f64 = 1e6;
+
 /// `v` for a message: Rust's shortest digits that read back, with an exponent where the plain
 /// form would be long (`1e300`, not a 1 and 300 zeros; `2200`, not `2.2e3`).
 pub(crate) fn show(v: f64) -> String {
@@ -46,6 +51,22 @@ impl Ctx<'_> {
                 format!("{} {unit} must be positive and finite", show(v)),
             ))
         }
+    }
+    /// A density (kg/m^3) at `key`: positive, finite and at most [`MAX_DENSITY`].
+    pub(super) fn density(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+        let v = self.positive(key, v, "kg/m^3")?;
+        if v > MAX_DENSITY {
+            return Err(self.err(
+                key,
+                format!(
+                    "{} kg/m^3 is above {}, over 40 times osmium's, the densest element (the \
+                     scene's units are SI)",
+                    show(v),
+                    show(MAX_DENSITY)
+                ),
+            ));
+        }
+        Ok(v)
     }
     pub(super) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         if v.is_finite() && v >= 0.0 {
@@ -137,7 +158,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             (_, Some(r)) => ctx.region(&format!("{key}.region"), r)?,
             _ => {}
         }
-        ctx.positive(&format!("{key}.density"), m.density, "kg/m^3")?;
+        ctx.density(&format!("{key}.density"), m.density)?;
     }
     for (i, gr) in f.ground.iter().enumerate() {
         let key = format!("ground[{i}]");
@@ -169,7 +190,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             ctx.positive(&format!("{key}.mass"), m, "kg")?;
         }
         if let Some(d) = b.density {
-            ctx.positive(&format!("{key}.density"), d, "kg/m^3")?;
+            ctx.density(&format!("{key}.density"), d)?;
             // The mass is density times volume: name the value that makes it overflow.
             let volume = 4.0 / 3.0 * std::f64::consts::PI * b.radius.powi(3);
             if !volume.is_finite() {
