@@ -80,18 +80,7 @@ impl ChenMaterial {
         poisson: f64,
         density: f64,
     ) -> Result<Self, PhysicsError> {
-        if !(poisson > -1.0 && poisson < 0.5) {
-            return Err(bad(
-                0,
-                format!("Poisson's ratio {poisson} outside (-1, 0.5)"),
-            ));
-        }
-        if !(young.is_finite() && young > 0.0) {
-            return Err(bad(
-                0,
-                format!("Young's modulus {young} Pa must be positive"),
-            ));
-        }
+        check_young_poisson(young, poisson)?;
         let kappa = young / (3.0 * (1.0 - 2.0 * poisson));
         let mu = young / (2.0 * (1.0 + poisson));
         Ok(Self::elastic(kappa, mu, density))
@@ -170,8 +159,26 @@ fn det(m: &Mat3) -> f64 {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
-fn bad(material: usize, message: String) -> PhysicsError {
+/// The error of material `material`.
+pub(super) fn bad(material: usize, message: String) -> PhysicsError {
     PhysicsError::BadMaterial { material, message }
+}
+
+/// Young's modulus `young` (Pa) positive and finite, Poisson's ratio `poisson` in (-1, 0.5).
+pub(super) fn check_young_poisson(young: f64, poisson: f64) -> Result<(), PhysicsError> {
+    if !(poisson > -1.0 && poisson < 0.5) {
+        return Err(bad(
+            0,
+            format!("Poisson's ratio {poisson} outside (-1, 0.5)"),
+        ));
+    }
+    if !(young.is_finite() && young > 0.0) {
+        return Err(bad(
+            0,
+            format!("Young's modulus {young} Pa must be positive"),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! Parameters of Xu's hyperelastic peridynamic material (MODEL.md section 5).
 
 use super::basis::Curve;
-use super::params::FractureParams;
+use super::params::{bad, check_young_poisson, FractureParams};
 use crate::error::PhysicsError;
 use crate::math::{dot, Mat3, Vec3};
 
@@ -105,18 +105,7 @@ impl XuMaterial {
         h: Curve,
         rule: XuModuli,
     ) -> Result<Self, PhysicsError> {
-        if !(poisson > -1.0 && poisson < 0.5) {
-            return Err(bad(
-                0,
-                format!("Poisson's ratio {poisson} outside (-1, 0.5)"),
-            ));
-        }
-        if !(young.is_finite() && young > 0.0) {
-            return Err(bad(
-                0,
-                format!("Young's modulus {young} Pa must be positive"),
-            ));
-        }
+        check_young_poisson(young, poisson)?;
         let (lambda, mu) = match rule {
             XuModuli::Paper => (
                 9.0 * young * poisson / (2.0 * (1.0 + poisson) * (1.0 - 2.0 * poisson)),
@@ -215,10 +204,6 @@ impl XuMaterial {
         }
         Ok(())
     }
-}
-
-fn bad(material: usize, message: String) -> PhysicsError {
-    PhysicsError::BadMaterial { material, message }
 }
 
 #[cfg(test)]
