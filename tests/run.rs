@@ -5,8 +5,7 @@
 
 mod common;
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::{fails, ok, perifrac, tiny_wall};
 use perifrac_io::{read_ply_crack, read_ply_points};
@@ -19,26 +18,6 @@ fn s(p: &Path) -> &str {
 fn manifest(dir: &Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("run.json")).unwrap();
     serde_json::from_str(&text).unwrap()
-}
-
-/// Every file under `dir` (relative path -> bytes).
-fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.insert(
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                );
-            }
-        }
-    }
-    out
 }
 
 /// Connected components of a triangle surface through shared vertices: component id per face.
@@ -162,7 +141,7 @@ fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
     let mut args2 = args;
     args2[3] = s(&again);
     ok(&args2);
-    let (a, b) = (files(&out), files(&again));
+    let (a, b) = (common::files(&out), common::files(&again));
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
     for (name, bytes) in &a {
         assert!(

@@ -12,6 +12,7 @@
 pub mod accuracy;
 mod bar;
 mod error;
+pub mod events;
 mod fit;
 mod plot;
 pub mod speed;

@@ -31,6 +31,9 @@ pub enum Which {
     },
     /// Hard cases: each survives, stops with a message, or is reported as a failure.
     Stability(Common),
+    /// The explicit step's event search on the default scene's impact: bonds broken,
+    /// fragments and crack pattern against a fine-step reference, at equal cost.
+    Events(Common),
     /// Bond-update rates per material path, seconds per step at the paper's wall size, the
     /// topology's share of a step during heavy fracture, memory per bond, the implicit step.
     Speed(Common),
@@ -53,6 +56,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Which::Accuracy { common, case } => accuracy_report(common, case),
         Which::Stability(c) => stability_report(c),
         Which::Speed(c) => speed_report(c),
+        Which::Events(c) => events_report(c),
     }
 }
 
@@ -134,6 +138,21 @@ fn stability_report(c: &Common) -> Result<()> {
         "{failed} case(s) failed; see {}",
         path.display()
     );
+    Ok(())
+}
+
+fn events_report(c: &Common) -> Result<()> {
+    let report = Report::start(c)?;
+    let (table, plot, text) = perifrac_bench::events::impact(effort(c), &mut report.progress())?;
+    let mut md = report.header("events");
+    md.push_str(&format!("{text}\n\n"));
+    md.push_str(&table.to_markdown());
+    let png = "events_wall.png";
+    match plot.write_png(&c.output.join(png)) {
+        Ok(()) => md.push_str(&format!("\n![bonds broken against time]({png})\n")),
+        Err(e) => eprintln!("note: {e}; the table is written without its plot"),
+    }
+    report.write("events", &md)?;
     Ok(())
 }
 

@@ -121,7 +121,12 @@ fn main() -> ExitCode {
             // Library errors quote what they wrap and do not also chain it, so the chain
             // (anyhow's contexts over one library error) repeats nothing.
             eprintln!("error: {err:#}");
-            ExitCode::FAILURE
+            match err.downcast_ref::<perifrac_scene::SceneError>() {
+                Some(perifrac_scene::SceneError::Interrupted { .. }) => {
+                    ExitCode::from(run::INTERRUPTED_EXIT)
+                }
+                _ => ExitCode::FAILURE,
+            }
         }
     }
 }

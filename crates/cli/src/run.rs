@@ -1,22 +1,34 @@
 //! `perifrac run SCENE -o DIR`: load and validate a scene, then simulate it with a progress bar
-//! and write frames into DIR.
+//! and write frames into DIR. SIGINT or SIGTERM writes a checkpoint and stops (a second one
+//! stops at once); `perifrac run --resume DIR` continues from it.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use perifrac_scene::{check_output_dir, Limits, Observer, Progress, Scene, SceneError, Setup};
+use perifrac_scene::{
+    check_output_dir, Checkpoint, Limits, Observer, Progress, Scene, SceneError, Setup,
+};
 
 /// Arguments of `perifrac run`.
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
-    /// Scene file (TOML); see data/scenes/ for examples.
-    pub scene: PathBuf,
+    /// Scene file (TOML); see data/scenes/ for examples. With --resume it is optional and, when
+    /// given, must be the scene the run was started with.
+    #[arg(required_unless_present = "resume")]
+    pub scene: Option<PathBuf>,
     /// Output directory for frames and run.json (must be empty unless --force).
-    #[arg(short, long)]
-    pub output: PathBuf,
+    #[arg(short, long, required_unless_present = "resume")]
+    pub output: Option<PathBuf>,
+    /// Continue the interrupted run in DIR from its checkpoint (written on SIGINT or SIGTERM,
+    /// and at frames as `[output] checkpoint_every` says); the files come out byte-identical
+    /// to those of a run that was never interrupted.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["output", "force", "frames"])]
+    pub resume: Option<PathBuf>,
     /// Overwrite the run files in a non-empty output directory.
     #[arg(long)]
     pub force: bool,
@@ -76,15 +88,41 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if args.frames == Some(0) {
         anyhow::bail!("--frames must be at least 1");
     }
-    check_output_dir(&args.output, args.force)?;
     let started = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    // what to run: a fresh scene into an empty directory, or the checkpoint in one
+    let (dir, scene, frames, checkpoint) = match &args.resume {
+        Some(dir) => {
+            let cp = Checkpoint::read(dir)?;
+            if let Some(path) = &args.scene {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("cannot read {}", path.display()))?;
+                anyhow::ensure!(
+                    text == cp.scene_text,
+                    "{} is not the scene the run in {} was started with ({}); leave the scene \
+                     out to resume that one",
+                    path.display(),
+                    dir.display(),
+                    cp.scene_path.display()
+                );
+            }
+            eprintln!("resuming {} from {}", cp.header.summary, dir.display());
+            let scene = cp.scene()?;
+            (dir.as_path(), scene, Some(cp.frames), Some(cp))
+        }
+        None => {
+            let (Some(scene), Some(dir)) = (&args.scene, &args.output) else {
+                anyhow::bail!("give a scene and -o DIR, or --resume DIR");
+            };
+            check_output_dir(dir, args.force)?;
+            (dir.as_path(), Scene::load(scene)?, args.frames, None)
+        }
+    };
     let limits = Limits {
         threads,
         allow_large: args.allow_large,
         ..Limits::for_this_machine()
     };
-    let setup = Setup::with_limits(&scene, args.frames, &limits).map_err(|e| match e {
+    let setup = Setup::with_limits(&scene, frames, &limits).map_err(|e| match e {
         SceneError::TooLarge { .. } => {
             anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
         }
@@ -96,7 +134,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
          (explicit stable limit {:.3e} s{}), {} frames of {} steps, {} on {threads} \
          thread(s), setup {:.2} s",
-        args.scene.display(),
+        scene.path.display(),
         info.particles,
         info.bonds,
         info.model,
@@ -115,26 +153,35 @@ pub fn run(args: &RunArgs) -> Result<()> {
         started.elapsed().as_secs_f64()
     );
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
-    let mut bar = Bar::new(interactive);
+    let mut bar = Bar::new(interactive, interrupt_flag()?);
     let t0 = Instant::now();
-    let result = perifrac_scene::run(setup, &args.output, &mut bar);
+    let result = match &checkpoint {
+        Some(cp) => perifrac_scene::resume(setup, cp, dir, &mut bar),
+        None => perifrac_scene::run(setup, dir, &mut bar),
+    };
     bar.finish();
     let wall = t0.elapsed().as_secs_f64();
-    let summary = result.with_context(|| {
-        format!(
-            "run of {} stopped; frames written so far are in {}",
-            args.scene.display(),
-            args.output.display()
-        )
-    })?;
+    let summary = result.map_err(|e| stopped(e, &scene.path, dir))?;
+    // steps taken by this process (a resumed run took the others before)
+    let resumed_at = checkpoint.as_ref().map_or(0, |cp| {
+        (cp.position.frame as u64 - 1)
+            .saturating_mul(cp.steps_per_frame)
+            .saturating_add(cp.position.step_in_frame)
+    });
+    let stepped = summary.steps.saturating_sub(resumed_at);
     let t = summary.stage_times;
     let share =
         |d: std::time::Duration| 100.0 * d.as_secs_f64() / t.total().as_secs_f64().max(1e-12);
     eprintln!(
-        "done in {wall:.2} s: {} steps ({:.0} steps/s), t = {:.4e} s, {} bonds broken, \
+        "done in {wall:.2} s: {} steps ({}{:.0} steps/s), t = {:.4e} s, {} bonds broken, \
          {} fragments, {} crack triangles",
         summary.steps,
-        summary.steps as f64 / wall.max(1e-9),
+        if resumed_at > 0 {
+            format!("{stepped} after resuming, ")
+        } else {
+            String::new()
+        },
+        stepped as f64 / wall.max(1e-9),
         summary.time,
         summary.broken_bonds,
         summary.fragments,
@@ -150,6 +197,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
             String::new()
         }
     );
+    if summary.integrator == "event_search" {
+        let s = summary.solver;
+        eprintln!(
+            "event search: {} sub-steps ({:.2} per step), {} trial sub-steps undone",
+            s.substeps,
+            s.substeps as f64 / summary.steps.max(1) as f64,
+            s.rejected
+        );
+    }
     if summary.integrator == "implicit" {
         let it = summary.solver;
         eprintln!(
@@ -175,9 +231,49 @@ pub fn run(args: &RunArgs) -> Result<()> {
     eprintln!(
         "{} frames in {}",
         summary.frames_written,
-        args.output.join("frames").display()
+        dir.join("frames").display()
     );
     Ok(())
+}
+
+/// The exit status of a run stopped by SIGINT or SIGTERM (after its checkpoint), as a shell
+/// reports a process ended by SIGINT.
+pub const INTERRUPTED_EXIT: u8 = 130;
+
+/// The error of a run that did not finish, with what to do next.
+fn stopped(e: SceneError, scene: &Path, dir: &Path) -> anyhow::Error {
+    match e {
+        SceneError::Interrupted { .. } => anyhow::Error::new(e).context(format!(
+            "run of {} interrupted; frames written so far are in {}; continue with \
+             `perifrac run --resume {}`",
+            scene.display(),
+            dir.display(),
+            dir.display()
+        )),
+        e => anyhow::Error::new(e).context(format!(
+            "run of {} stopped; frames written so far are in {}",
+            scene.display(),
+            dir.display()
+        )),
+    }
+}
+
+/// True once SIGINT or SIGTERM arrived; a second one ends the process at once (exit 130).
+fn interrupt_flag() -> Result<Arc<AtomicBool>> {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let flag = Arc::new(AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        // the shutdown first: it fires only when the flag is already set, by the first signal
+        signal_hook::flag::register_conditional_shutdown(
+            sig,
+            i32::from(INTERRUPTED_EXIT),
+            Arc::clone(&flag),
+        )
+        .context("cannot install the signal handlers")?;
+        signal_hook::flag::register(sig, Arc::clone(&flag))
+            .context("cannot install the signal handlers")?;
+    }
+    Ok(flag)
 }
 
 /// The progress bar: simulated time as the position, steps per second, broken bonds,
@@ -186,10 +282,11 @@ struct Bar {
     bar: ProgressBar,
     started: Instant,
     last: Instant,
+    interrupt: Arc<AtomicBool>,
 }
 
 impl Bar {
-    fn new(visible: bool) -> Bar {
+    fn new(visible: bool, interrupt: Arc<AtomicBool>) -> Bar {
         let bar = ProgressBar::with_draw_target(
             Some(1),
             if visible {
@@ -208,6 +305,7 @@ impl Bar {
             bar,
             started: Instant::now(),
             last: Instant::now() - Duration::from_secs(1),
+            interrupt,
         }
     }
 
@@ -217,6 +315,15 @@ impl Bar {
 }
 
 impl Observer for Bar {
+    fn interrupted(&mut self) -> bool {
+        let stop = self.interrupt.load(Ordering::SeqCst);
+        if stop {
+            self.bar
+                .println("interrupted: writing a checkpoint (interrupt again to stop at once)");
+        }
+        stop
+    }
+
     fn step(&mut self, p: &Progress) {
         // Formatting the message costs more than a small step: refresh a few times a second.
         if self.last.elapsed() < Duration::from_millis(200) && p.steps < p.total_steps {

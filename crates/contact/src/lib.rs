@@ -21,6 +21,7 @@ mod incremental;
 mod kernel;
 mod math;
 mod params;
+mod persist;
 mod step;
 mod surface;
 

@@ -1,6 +1,8 @@
 //! What acts on the particles from outside the material (contact, say), as the integrators see
 //! it. The physics crate names no collider: the caller implements [`Environment`].
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::math::Vec3;
 
 /// What an explicit step shows its environment, after the drift and the internal forces.
@@ -27,6 +29,15 @@ pub trait Environment {
     /// The same environment as a potential energy for an implicit step, when it can be one.
     fn implicit(&mut self) -> Option<&mut dyn crate::ImplicitEnvironment> {
         None
+    }
+
+    /// Writes the environment's own state (colliders' motion), so that a trial step can be
+    /// undone by [`Environment::restore`]; stateless environments write nothing.
+    fn save(&self, _w: &mut Writer) {}
+
+    /// Reads what [`Environment::save`] wrote.
+    fn restore(&mut self, _r: &mut Reader) -> Result<(), CheckpointError> {
+        Ok(())
     }
 }
 

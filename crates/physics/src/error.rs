@@ -73,6 +73,9 @@ pub enum PhysicsError {
         /// Number of particles.
         count: usize,
     },
+    /// A checkpoint or snapshot that does not fit this simulation.
+    #[error("checkpoint: {0}")]
+    Checkpoint(#[from] perifrac_checkpoint::CheckpointError),
     /// A load or integrator setting out of range.
     #[error("{0}")]
     BadSetting(String),

@@ -1,6 +1,8 @@
 //! Bond breaking (MODEL.md section 2, Fracture): `sw = (e - ep) / delta` against the threshold
 //! `s_crit (1 + alpha phi)`, from either side, tension only, permanent and in both directions.
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::family::Family;
 use crate::material::kernel::Plastic;
 use crate::math::{norm, sub, Vec3};
@@ -17,6 +19,8 @@ pub struct Damage {
     alpha: Vec<f64>,
     threshold: Vec<f64>,
     new_count: Vec<u32>,
+    /// Largest `sw / threshold - 1` over the bonds the last check broke (0 when none broke).
+    overshoot: f64,
 }
 
 impl Damage {
@@ -32,6 +36,7 @@ impl Damage {
             alpha,
             threshold: vec![0.0; n],
             new_count: vec![0; n],
+            overshoot: 0.0,
         }
     }
 
@@ -49,6 +54,35 @@ impl Damage {
         &self.state
     }
 
+    /// Writes the bond states for a checkpoint (the per-particle counts follow from them).
+    pub(crate) fn save(&self, w: &mut Writer) {
+        w.tag("damage");
+        w.array(&self.state);
+    }
+
+    /// Reads what [`Damage::save`] wrote and recounts the intact bonds of every particle.
+    pub(crate) fn restore(
+        &mut self,
+        family: &Family,
+        r: &mut Reader,
+    ) -> Result<(), CheckpointError> {
+        r.tag("damage")?;
+        r.array_into("bond states", &mut self.state)?;
+        if let Some(&b) = self.state.iter().find(|&&b| b > 1) {
+            return Err(CheckpointError::Invalid {
+                what: "bond states".into(),
+                message: format!("state {b} is neither intact (1) nor broken (0)"),
+            });
+        }
+        for (i, c) in self.intact.iter_mut().enumerate() {
+            *c = self.state[family.range(i)]
+                .iter()
+                .map(|&b| u32::from(b))
+                .sum();
+        }
+        Ok(())
+    }
+
     /// Number of intact directed bonds.
     pub fn intact_bonds(&self) -> usize {
         self.intact.iter().map(|&c| c as usize).sum()
@@ -64,6 +98,7 @@ impl Damage {
             alpha,
             threshold,
             new_count,
+            overshoot: _,
         } = self;
         state.len()
             + (initial.len() + intact.len() + new_count.len()) * 4
@@ -124,6 +159,7 @@ impl Damage {
                 }
             },
         );
+        self.overshoot = 0.0;
         for i in 0..family.len() {
             if self.new_count[i] == 0 {
                 continue;
@@ -136,8 +172,21 @@ impl Damage {
                     if j as usize > i {
                         broken.push((i as u32, j));
                     }
+                    // how far past its threshold the bond went, from the side that broke it
+                    let e = norm(sub(y[j as usize], y[i])) - family.rest_lengths()[k];
+                    let (epij, epji) = p.pair(k);
+                    let over = ((e - epij) * inv_delta / self.threshold[i])
+                        .max((e - epji) * inv_delta / self.threshold[j as usize])
+                        - 1.0;
+                    self.overshoot = self.overshoot.max(over);
                 }
             }
         }
+    }
+
+    /// Largest relative overshoot `sw / threshold - 1` of the bonds the last check broke, from
+    /// the end that broke each (0 when none broke): how late the step saw them go.
+    pub fn last_overshoot(&self) -> f64 {
+        self.overshoot
     }
 }

@@ -49,8 +49,8 @@ pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
 pub use integrate::{
-    Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator, QuasiNewton, Simulation,
-    Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,
+    EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,
+    QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,
 };
 pub use loads::{AnchorMotion, Loads};
 pub use material::{

@@ -3,6 +3,7 @@
 
 use crate::error::PhysicsError;
 use crate::math::{add, axpy, cross, mat_vec, norm, rotation, sub, Vec3};
+use perifrac_checkpoint::{expect_count, CheckpointError, Reader, Writer};
 
 /// Marker for a particle without an anchor.
 const FREE: u32 = u32::MAX;
@@ -151,6 +152,33 @@ impl Loads {
         }
         for &p in particles {
             self.anchor_of[p as usize] = FREE;
+        }
+        Ok(())
+    }
+
+    /// Writes which particles are anchored now (releases change it) for a checkpoint; the
+    /// motions, gravity and damping come from the scene.
+    pub fn save(&self, w: &mut Writer) {
+        w.tag("loads");
+        w.usize(self.motions.len());
+        w.array(&self.anchor_of);
+    }
+
+    /// Reads what [`Loads::save`] wrote, checked against these loads' motions.
+    pub fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("loads")?;
+        expect_count(
+            "anchor motions",
+            self.motions.len(),
+            r.usize("anchor motions")?,
+        )?;
+        r.array_into("anchored particles", &mut self.anchor_of)?;
+        let m = self.motions.len() as u32;
+        if let Some(&a) = self.anchor_of.iter().find(|&&a| a != FREE && a >= m) {
+            return Err(CheckpointError::Invalid {
+                what: "anchored particles".into(),
+                message: format!("anchor {a} of {m}"),
+            });
         }
         Ok(())
     }

@@ -1,5 +1,7 @@
 //! The state an integrator advances: positions, velocities and the clock.
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::math::Vec3;
 
 /// Positions (m), velocities (m/s), simulated time (s) and the step counter of a particle
@@ -35,5 +37,24 @@ impl State {
     /// True when there are no particles.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
+    }
+
+    /// Writes positions, velocities, time and step count for a checkpoint.
+    pub fn save(&self, w: &mut Writer) {
+        w.tag("state");
+        w.array(&self.positions);
+        w.array(&self.velocities);
+        w.f64(self.time);
+        w.u64(self.steps);
+    }
+
+    /// Reads what [`State::save`] wrote; the particle count must be this state's.
+    pub fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("state")?;
+        r.array_into("positions", &mut self.positions)?;
+        r.array_into("velocities", &mut self.velocities)?;
+        self.time = r.f64("time")?;
+        self.steps = r.u64("steps")?;
+        Ok(())
     }
 }

@@ -4,6 +4,7 @@
 
 use std::time::{Duration, Instant};
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use perifrac_contact::{Colliders, ContactStats};
 use perifrac_physics::math::Vec3;
 use perifrac_physics::{
@@ -187,6 +188,72 @@ impl Driver {
         self.times
     }
 
+    /// Writes everything a step changes: the mesh (cracks, copies, positions), the solver, the
+    /// balls, the anchors still to release and the counters.
+    pub fn save(&self, w: &mut Writer) {
+        w.tag("driver");
+        w.usize(self.next_release);
+        w.u64(self.broken_bonds);
+        w.u64(self.crack_faces);
+        let t = &self.times;
+        for d in [t.physics, t.topology, t.advect, t.output] {
+            w.f64(d.as_secs_f64());
+        }
+        self.mesh.save(w);
+        self.solver.save(w);
+        w.bool(self.colliders.is_some());
+        if let Some(c) = &self.colliders {
+            c.save(w);
+        }
+    }
+
+    /// Reads what [`Driver::save`] wrote into a driver made by the same setup.
+    pub fn restore(&mut self, r: &mut Reader) -> Result<(), PhysicsError> {
+        r.tag("driver")?;
+        let next = r.usize("releases done")?;
+        if next > self.releases.len() {
+            return Err(CheckpointError::Invalid {
+                what: "releases done".into(),
+                message: format!("{next} of {} anchor releases", self.releases.len()),
+            }
+            .into());
+        }
+        self.next_release = next;
+        self.broken_bonds = r.u64("broken bonds")?;
+        self.crack_faces = r.u64("crack faces")?;
+        let mut secs = [0.0; 4];
+        for s in &mut secs {
+            // wall times only feed the summary: a bad one becomes zero rather than an error
+            *s = r.f64("stage times")?;
+        }
+        let d = |s: f64| Duration::try_from_secs_f64(s).unwrap_or_default();
+        self.times = StageTimes {
+            physics: d(secs[0]),
+            topology: d(secs[1]),
+            advect: d(secs[2]),
+            output: d(secs[3]),
+        };
+        self.mesh.restore(r)?;
+        self.solver.restore(r)?;
+        let has = r.bool("colliders")?;
+        match (&mut self.colliders, has) {
+            (Some(c), true) => c.restore(r)?,
+            (None, false) => {}
+            (here, _) => {
+                return Err(CheckpointError::Invalid {
+                    what: "colliders".into(),
+                    message: format!(
+                        "the checkpoint {} colliders and this scene {}",
+                        if has { "has" } else { "has no" },
+                        if here.is_some() { "has" } else { "has none" }
+                    ),
+                }
+                .into())
+            }
+        }
+        Ok(())
+    }
+
     /// Adds frame-output time to the counters.
     pub(crate) fn add_output_time(&mut self, d: Duration) {
         self.times.output += d;
@@ -236,6 +303,14 @@ impl Environment for ContactEnvironment<'_> {
 
     fn implicit(&mut self) -> Option<&mut dyn ImplicitEnvironment> {
         Some(self)
+    }
+
+    fn save(&self, w: &mut Writer) {
+        self.colliders.save(w);
+    }
+
+    fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        self.colliders.restore(r)
     }
 }
 

@@ -75,6 +75,30 @@ pub enum SceneError {
     /// Writing a frame failed.
     #[error(transparent)]
     Io(#[from] perifrac_io::IoError),
+    /// A checkpoint that cannot be resumed.
+    #[error("{path}: {message}")]
+    Checkpoint {
+        /// The checkpoint file.
+        path: PathBuf,
+        /// Why not.
+        message: String,
+    },
+    /// The run was interrupted (a signal); the frames written so far are kept and a
+    /// checkpoint holds the state.
+    #[error(
+        "interrupted at t = {time:.6e} s (step {step}) after writing {frames} frame(s); \
+         checkpoint in {checkpoint}"
+    )]
+    Interrupted {
+        /// Simulated time (s).
+        time: f64,
+        /// Steps completed.
+        step: u64,
+        /// Frames written and kept.
+        frames: usize,
+        /// The checkpoint written.
+        checkpoint: PathBuf,
+    },
     /// The run stopped (an instability); the frames written so far are kept.
     #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
     Stopped {

@@ -6,7 +6,8 @@
 //! [`Scene::load`] parses it with line and column in every error; [`Setup::new`] validates it and
 //! builds the mesh, the peridynamic model, the colliders and the solver without writing
 //! anything; [`run`] steps the [`Driver`] and writes frames into a run directory (layout in
-//! [`output`]), atomically, reporting progress to an [`Observer`].
+//! [`output`]), atomically, reporting progress to an [`Observer`]; an interrupted run leaves a
+//! [`Checkpoint`] that [`resume`] continues from, byte for byte.
 //!
 //! ```no_run
 //! use perifrac_scene::{run, Scene, Setup, Silent};
@@ -20,6 +21,7 @@
 #![warn(missing_docs)]
 
 pub mod budget;
+pub mod checkpoint;
 pub mod driver;
 pub mod error;
 pub mod load;
@@ -29,12 +31,13 @@ pub mod schema;
 pub mod setup;
 
 pub use budget::{Limits, WorkEstimate};
+pub use checkpoint::{Checkpoint, Position, CHECKPOINT_FILE};
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use load::Scene;
 pub use output::{
-    check_output_dir, FrameWriter, IterationsJson, RunManifest, SolverJson, POVRAY_MESH_NAME,
-    RUN_FORMAT,
+    check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SolverJson,
+    POVRAY_MESH_NAME, RUN_FORMAT,
 };
-pub use run::{run, Observer, Progress, Silent, Summary};
-pub use setup::{OutputOptions, Setup, SetupInfo};
+pub use run::{resume, run, Observer, Progress, Silent, Summary};
+pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo};

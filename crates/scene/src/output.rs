@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::driver::Driver;
 use crate::error::SceneError;
-use crate::setup::{bounds, OutputOptions, SetupInfo};
+use crate::setup::{bounds, OutputOptions, Setup};
 
 /// The identifier of the run-directory layout, written into `run.json`.
 pub const RUN_FORMAT: &str = "perifrac-run/1";
@@ -117,7 +117,7 @@ pub struct BallJson {
 }
 
 /// One frame in `run.json`; paths are relative to the run directory.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct FrameJson {
     /// 0 is the rest state.
     pub index: usize,
@@ -150,6 +150,18 @@ pub struct FrameJson {
     /// Implicit runs: iterations so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub implicit: Option<IterationsJson>,
+    /// Runs with the event search: sub-steps so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchJson>,
+}
+
+/// An event-search run's sub-steps up to a frame, in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct SearchJson {
+    /// Accepted sub-steps over all steps so far.
+    pub substeps: u64,
+    /// Trial sub-steps rejected and undone.
+    pub rejected: u64,
 }
 
 /// Refuses a non-empty `dir` unless `force`; reads only, so it can run before the setup.
@@ -182,18 +194,40 @@ pub struct FrameWriter {
 
 impl FrameWriter {
     /// Prepares `dir`: removes what an earlier run left there (`run.json`, `scene.toml`,
-    /// `frames/`, `render/`) and nothing else, writes the initial `run.json` (no frames, not
+    /// `checkpoint.bin`, `frames/`, `render/`) and nothing else, writes the initial `run.json` (no frames, not
     /// finished), then `scene.toml` and `frames/`; a failure after `run.json` is recorded in
     /// it.
-    pub fn create(
-        dir: &Path,
-        scene_path: &Path,
-        scene_text: &str,
-        info: &SetupInfo,
-        driver: &Driver,
-        options: OutputOptions,
-    ) -> Result<FrameWriter, SceneError> {
+    pub fn create(dir: &Path, setup: &Setup) -> Result<FrameWriter, SceneError> {
         clear_output_dir(dir)?;
+        FrameWriter::start(dir, setup, Vec::new())
+    }
+
+    /// Takes over `dir` for a resumed run: `run.json` holds the frames `recorded` before the
+    /// checkpoint (later ones, written after it, are dropped and written again), and
+    /// `scene.toml` and `frames/` are written as by [`FrameWriter::create`]; nothing else is
+    /// removed.
+    pub fn resume(
+        dir: &Path,
+        setup: &Setup,
+        recorded: Vec<FrameJson>,
+    ) -> Result<FrameWriter, SceneError> {
+        FrameWriter::start(dir, setup, recorded)
+    }
+
+    fn start(
+        dir: &Path,
+        setup: &Setup,
+        recorded: Vec<FrameJson>,
+    ) -> Result<FrameWriter, SceneError> {
+        let Setup {
+            scene_path,
+            scene_text,
+            driver,
+            output: options,
+            info,
+            ..
+        } = setup;
+        let options = *options;
         let manifest = RunManifest {
             format: RUN_FORMAT.into(),
             scene: scene_path
@@ -222,7 +256,7 @@ impl FrameWriter {
             dt: info.dt,
             dt_limit: info.dt_limit,
             mass: info.mass,
-            frames: Vec::new(),
+            frames: recorded,
             finished: false,
             error: None,
             solver: (info.model != "chen" || info.integrator != "explicit").then(|| SolverJson {
@@ -339,6 +373,13 @@ impl FrameWriter {
                     factor_bytes: s.factor_bytes,
                 }
             }),
+            search: (driver.solver().integrator_name() == "event_search").then(|| {
+                let s = driver.solver().stats();
+                SearchJson {
+                    substeps: s.substeps,
+                    rejected: s.rejected,
+                }
+            }),
         };
         self.manifest.frames.push(frame);
         self.manifest.finished = last;
@@ -407,7 +448,7 @@ fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
             std::fs::remove_dir_all(&p).map_err(|e| err(format!("cannot clear {name}/: {e}")))?;
         }
     }
-    for name in ["run.json", "scene.toml"] {
+    for name in ["run.json", "scene.toml", crate::checkpoint::CHECKPOINT_FILE] {
         let p = dir.join(name);
         if p.is_file() {
             std::fs::remove_file(&p).map_err(|e| err(format!("cannot remove {name}: {e}")))?;

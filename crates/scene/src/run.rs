@@ -2,6 +2,10 @@
 //! [`crate::output`]), progress to an [`Observer`], a [`Summary`] at the end.
 
 use std::path::Path;
+use std::time::Instant;
+
+use crate::checkpoint::{self, Checkpoint, Position, RunIdentity, CHECKPOINT_FILE};
+use crate::setup::CheckpointPolicy;
 
 use crate::driver::StageTimes;
 use crate::error::SceneError;
@@ -33,6 +37,11 @@ pub trait Observer {
     fn step(&mut self, _progress: &Progress) {}
     /// After every frame is written.
     fn frame(&mut self, _progress: &Progress) {}
+    /// Asked after every step and frame: true makes the run write a checkpoint and stop with
+    /// [`SceneError::Interrupted`] (the command line answers true after SIGINT or SIGTERM).
+    fn interrupted(&mut self) -> bool {
+        false
+    }
 }
 
 /// An observer that ignores everything.
@@ -74,30 +83,76 @@ pub struct Summary {
 /// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
 /// so far stay, `run.json` records the error, and [`SceneError::Stopped`] is returned; a
 /// failure to write a frame (a full disk, say) is recorded in `run.json` too and returned.
+/// When the observer reports an interruption, a checkpoint is written and
+/// [`SceneError::Interrupted`] returned; [`resume`] continues from it.
 pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summary, SceneError> {
+    let id = RunIdentity::of(&setup);
+    let writer = FrameWriter::create(dir, &setup)?;
+    let start = Position {
+        frame: 0,
+        step_in_frame: 0,
+    };
+    drive(setup, &id, writer, dir, start, observer)
+}
+
+/// Continues the run in `dir` from `checkpoint` (read by [`Checkpoint::read`]); `setup` must be
+/// built from [`Checkpoint::scene`] with [`Checkpoint::frames`]. A checkpoint of another scene,
+/// mesh or step is refused. The files written are byte-identical to those of a run that was
+/// never interrupted.
+pub fn resume(
+    mut setup: Setup,
+    checkpoint: &Checkpoint,
+    dir: &Path,
+    observer: &mut dyn Observer,
+) -> Result<Summary, SceneError> {
+    // the identity of the fresh setup, before the restore cuts its mesh
+    let id = RunIdentity::of(&setup);
+    checkpoint.restore(dir, &mut setup)?;
+    let writer = FrameWriter::resume(dir, &setup, checkpoint.recorded.clone())?;
+    drive(setup, &id, writer, dir, checkpoint.position, observer)
+}
+
+/// The step loop from `start` to the end.
+fn drive(
+    setup: Setup,
+    id: &RunIdentity,
+    mut writer: FrameWriter,
+    dir: &Path,
+    start: Position,
+    observer: &mut dyn Observer,
+) -> Result<Summary, SceneError> {
     let Setup {
-        scene_path,
-        scene_text,
         mut driver,
         frames,
         steps_per_frame,
         output,
         info,
+        ..
     } = setup;
-    let mut writer = FrameWriter::create(dir, &scene_path, &scene_text, &info, &driver, output)?;
     let total_steps = (frames as u64).saturating_mul(steps_per_frame);
     let mut progress = Progress {
-        time: 0.0,
+        time: driver.solver().time(),
         duration: info.dt * total_steps as f64,
-        steps: 0,
+        steps: driver.solver().steps(),
         total_steps,
-        broken_bonds: 0,
-        fragments: 1,
-        frames_written: 0,
+        broken_bonds: driver.broken_bonds(),
+        fragments: writer.manifest().frames.last().map_or(1, |f| f.fragments),
+        frames_written: writer.frames_written(),
     };
-    for frame in 0..=frames {
+    let mut last_checkpoint = Instant::now();
+    // stops with the error recorded in run.json (best effort: the error is what is reported)
+    let stop = |writer: &mut FrameWriter, e: SceneError| {
+        let _ = writer.record_error(e.to_string());
+        Err(e)
+    };
+    for frame in start.frame..=frames {
         if frame > 0 {
-            for _ in 0..steps_per_frame {
+            let first = if frame == start.frame {
+                start.step_in_frame
+            } else {
+                0
+            };
+            for k in first..steps_per_frame {
                 if let Err(cause) = driver.step() {
                     let stopped = SceneError::Stopped {
                         time: driver.solver().time(),
@@ -105,14 +160,19 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
                         frames: writer.frames_written(),
                         cause,
                     };
-                    // Best effort: the stop is the error to report, recorded or not.
-                    let _ = writer.record_error(stopped.to_string());
-                    return Err(stopped);
+                    return stop(&mut writer, stopped);
                 }
                 progress.steps += 1;
                 progress.time = driver.solver().time();
                 progress.broken_bonds = driver.broken_bonds();
                 observer.step(&progress);
+                if observer.interrupted() {
+                    let at = Position {
+                        frame,
+                        step_in_frame: k + 1,
+                    };
+                    return interrupt(&mut writer, dir, id, at, &driver);
+                }
             }
         }
         let written = writer
@@ -120,16 +180,37 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
             .map(|w| w.fragments);
         let fragments = match written {
             Ok(fragments) => fragments,
-            Err(e) => {
-                // Best effort, as above: the write error is what the caller reports.
-                let _ = writer.record_error(e.to_string());
-                return Err(e);
-            }
+            Err(e) => return stop(&mut writer, e),
         };
         progress.fragments = fragments;
-        progress.frames_written = frame + 1;
+        progress.frames_written = writer.frames_written();
         observer.frame(&progress);
+        if frame < frames {
+            let next = Position {
+                frame: frame + 1,
+                step_in_frame: 0,
+            };
+            if observer.interrupted() {
+                return interrupt(&mut writer, dir, id, next, &driver);
+            }
+            let due = match output.checkpoints {
+                CheckpointPolicy::EveryFrames(n) => frame > 0 && frame % n == 0,
+                CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
+                CheckpointPolicy::OnInterrupt => false,
+            };
+            if due {
+                let t = Instant::now();
+                let saved = checkpoint::write(dir, id, next, &writer.manifest().frames, &driver);
+                driver.add_output_time(t.elapsed());
+                if let Err(e) = saved {
+                    return stop(&mut writer, e);
+                }
+                last_checkpoint = Instant::now();
+            }
+        }
     }
+    // finished: a checkpoint left from before would only resume what is done
+    let _ = std::fs::remove_file(dir.join(CHECKPOINT_FILE));
     let last = writer
         .manifest()
         .frames
@@ -150,4 +231,26 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
         solver: driver.solver().stats(),
         integrator: driver.solver().integrator_name(),
     })
+}
+
+/// Writes a checkpoint at `at`, records the interruption in `run.json` and returns it as the
+/// error.
+fn interrupt(
+    writer: &mut FrameWriter,
+    dir: &Path,
+    id: &RunIdentity,
+    at: Position,
+    driver: &crate::driver::Driver,
+) -> Result<Summary, SceneError> {
+    let e = match checkpoint::write(dir, id, at, &writer.manifest().frames, driver) {
+        Ok(path) => SceneError::Interrupted {
+            time: driver.solver().time(),
+            step: driver.solver().steps(),
+            frames: writer.frames_written(),
+            checkpoint: path,
+        },
+        Err(e) => e,
+    };
+    let _ = writer.record_error(e.to_string());
+    Err(e)
 }

@@ -174,6 +174,15 @@ pub struct SimulationSpec {
     pub influence: Option<String>,
     /// Xu: the inversion guard's factor on the rest bond stiffness (default none).
     pub inversion_guard: Option<f64>,
+    /// Explicit: cover each step by sub-steps of `dt 2^-k`, refined where forces jump or bonds
+    /// break late (default false).
+    pub event_search: Option<bool>,
+    /// Event search: the finest level `k_max` (default 4).
+    pub event_levels: Option<u32>,
+    /// Event search: the largest force may grow by this factor in a sub-step (default 1.1).
+    pub force_growth: Option<f64>,
+    /// Event search: a bond may break this share past its threshold (default 0.1).
+    pub overshoot: Option<f64>,
 }
 
 /// A ground plane (half-space) through `point` with outward `normal`.
@@ -269,4 +278,8 @@ pub struct OutputSpec {
     pub povray: Option<bool>,
     /// Also write particles with damage as PLY points (default true).
     pub particles: Option<bool>,
+    /// Write a checkpoint (`checkpoint.bin`) after every this many frames; 0: only when the
+    /// run is interrupted; unset: after the first frame that ends five minutes or more of
+    /// wall time after the last checkpoint.
+    pub checkpoint_every: Option<usize>,
 }

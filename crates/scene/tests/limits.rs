@@ -255,3 +255,40 @@ fn run_json_is_written_first_and_records_what_stopped_the_start() {
     assert_eq!(manifest["error"].as_str(), Some(e.to_string().as_str()));
     assert!(manifest["frames"].as_array().unwrap().is_empty());
 }
+
+#[test]
+fn event_search_keys_are_checked() {
+    let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
+    for (extra, key, says) in [
+        (
+            "event_levels = 3",
+            "simulation.event_levels",
+            "event_search = true",
+        ),
+        (
+            "overshoot = 0.2",
+            "simulation.overshoot",
+            "event_search = true",
+        ),
+        (
+            "event_search = true\nevent_levels = 30",
+            "simulation.event_levels",
+            "more than 20",
+        ),
+        (
+            "event_search = true\nforce_growth = 1.0",
+            "simulation.force_growth",
+            "above 1",
+        ),
+        (
+            "event_search = true\novershoot = -1.0",
+            "simulation.overshoot",
+            ">= 0",
+        ),
+    ] {
+        let e = refusal(&with(extra)).to_string();
+        assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
+    }
+    let setup = Setup::with_limits(&scene(&with("event_search = true")), None, &limits()).unwrap();
+    assert_eq!(setup.info.integrator, "event_search");
+}

@@ -15,6 +15,7 @@ mod error;
 pub mod faces;
 mod mesh;
 pub mod mesher;
+mod persist;
 mod pieces;
 pub mod primitives;
 mod quality;

@@ -14,6 +14,7 @@ use crate::material::ForceModel;
 use crate::math::{dot, norm, sub, Vec3};
 use crate::stable_step::{stable_frequency, FrequencyEstimate};
 use crate::state::State;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use rayon::prelude::*;
 
 /// How the step is chosen.
@@ -53,9 +54,9 @@ impl Default for ExplicitConfig {
 
 /// Velocity Verlet: owns the per-step buffers (forces, inverse masses, broken bonds).
 pub struct VelocityVerlet {
-    f: Vec<Vec3>,
+    pub(super) f: Vec<Vec3>,
     inv_mass: Vec<f64>,
-    dt: f64,
+    pub(super) dt: f64,
     guard: f64,
     broken: Vec<(u32, u32)>,
     estimate: Option<FrequencyEstimate>,
@@ -188,6 +189,26 @@ impl<M: ForceModel> Integrator<M> for VelocityVerlet {
 
     fn name(&self) -> &'static str {
         "explicit"
+    }
+
+    fn save_state(&self, w: &mut Writer) {
+        w.tag("velocity verlet");
+        w.f64(self.dt);
+        w.array(&self.f);
+    }
+
+    fn restore_state(&mut self, r: &mut Reader, _: &M, _: &Loads) -> Result<(), PhysicsError> {
+        r.tag("velocity verlet")?;
+        let dt = r.f64("time step")?;
+        if dt.to_bits() != self.dt.to_bits() {
+            return Err(CheckpointError::Invalid {
+                what: "time step".into(),
+                message: format!("{dt:e} s in the checkpoint, {:e} s in this run", self.dt),
+            }
+            .into());
+        }
+        r.array_into("forces", &mut self.f)?;
+        Ok(())
     }
 }
 

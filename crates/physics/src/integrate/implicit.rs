@@ -17,6 +17,8 @@
 
 use std::time::Instant;
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use super::simulation::{check_lengths, Integrator, Simulation, SolverStats};
 use super::step_matrix::{StepMatrix, HELD};
 use crate::environment::{Environment, ImplicitEnvironment};
@@ -273,29 +275,39 @@ impl QuasiNewton {
         model: &M,
         loads: &Loads,
     ) -> Result<(), PhysicsError> {
-        let family = model.discretization().family();
-        if !self.matrix.matches(&self.held) {
-            self.matrix = StepMatrix::new(family, &self.held)?;
-        }
         model.bond_stiffness(&mut self.bond_k);
-        for k in 0..self.bond_k.len() {
-            self.pair[k] = self.bond_k[k] + self.bond_k[self.reverse[k] as usize];
-        }
         self.intact_at_factor = self.bond_k.iter().filter(|&&k| k != 0.0).count();
-        let dt = self.config.dt;
-        let masses = model.masses();
-        let damping = loads.damping;
         self.factored_curvature.copy_from_slice(&self.env_curvature);
-        let env = &self.factored_curvature;
-        let seconds = self.matrix.factor(
-            family,
-            |i| masses[i] / (dt * dt) + damping * masses[i] / dt + env[i],
-            &self.pair,
-        )?;
+        let seconds = self.factor(model, loads)?;
         self.stats.factorizations += 1;
         self.stats.factor_seconds += seconds;
         self.stats.factor_bytes = self.matrix.bytes();
         Ok(())
+    }
+
+    /// Assembles `S` from `bond_k` and `factored_curvature` for the free set `held` and
+    /// factors it; returns the seconds it took.
+    fn factor<M: QuasiNewtonModel>(
+        &mut self,
+        model: &M,
+        loads: &Loads,
+    ) -> Result<f64, PhysicsError> {
+        let family = model.discretization().family();
+        if !self.matrix.matches(&self.held) {
+            self.matrix = StepMatrix::new(family, &self.held)?;
+        }
+        for k in 0..self.bond_k.len() {
+            self.pair[k] = self.bond_k[k] + self.bond_k[self.reverse[k] as usize];
+        }
+        let dt = self.config.dt;
+        let masses = model.masses();
+        let damping = loads.damping;
+        let env = &self.factored_curvature;
+        self.matrix.factor(
+            family,
+            |i| masses[i] / (dt * dt) + damping * masses[i] / dt + env[i],
+            &self.pair,
+        )
     }
 
     /// `Phi` at `x` with its gradient in `g` (free and body components; zero on held ones).
@@ -665,6 +677,86 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
 
     fn stats(&self) -> SolverStats {
         self.stats
+    }
+
+    fn save_state(&self, w: &mut Writer) {
+        w.tag("quasi-newton");
+        w.f64(self.config.dt);
+        // what S was assembled from when last factored, to factor the same matrix again
+        w.array(&self.bond_k);
+        w.array(&self.factored_curvature);
+        w.array(&self.env_curvature);
+        w.usize(self.intact_at_factor);
+        let s = &self.stats;
+        for v in [
+            s.iterations,
+            s.capped_steps,
+            s.evaluations,
+            s.factorizations,
+            s.solves,
+        ] {
+            w.u64(v);
+        }
+        w.f64(s.factor_seconds);
+        w.f64(s.solve_seconds);
+        w.usize(s.factor_bytes);
+        let l = &self.last;
+        w.usize(l.iterations);
+        w.f64(l.phi_start);
+        w.f64(l.phi_end);
+        w.bool(l.capped);
+        w.array(&self.trace);
+    }
+
+    fn restore_state(
+        &mut self,
+        r: &mut Reader,
+        model: &M,
+        loads: &Loads,
+    ) -> Result<(), PhysicsError> {
+        r.tag("quasi-newton")?;
+        let dt = r.f64("time step")?;
+        if dt.to_bits() != self.config.dt.to_bits() {
+            return Err(CheckpointError::Invalid {
+                what: "time step".into(),
+                message: format!(
+                    "{dt:e} s in the checkpoint, {:e} s in this run",
+                    self.config.dt
+                ),
+            }
+            .into());
+        }
+        r.array_into("bond stiffness", &mut self.bond_k)?;
+        r.array_into("factored curvature", &mut self.factored_curvature)?;
+        r.array_into("contact curvature", &mut self.env_curvature)?;
+        self.intact_at_factor = r.usize("intact bonds when factored")?;
+        let mut s = SolverStats::default();
+        for v in [
+            &mut s.iterations,
+            &mut s.capped_steps,
+            &mut s.evaluations,
+            &mut s.factorizations,
+            &mut s.solves,
+        ] {
+            *v = r.u64("counters")?;
+        }
+        s.factor_seconds = r.f64("factor seconds")?;
+        s.solve_seconds = r.f64("solve seconds")?;
+        s.factor_bytes = r.usize("factor bytes")?;
+        self.last = StepInfo {
+            iterations: r.usize("last iterations")?,
+            phi_start: r.f64("last phi")?,
+            phi_end: r.f64("last phi")?,
+            capped: r.bool("last capped")?,
+        };
+        r.array_vec("trace", &mut self.trace)?;
+        for (i, h) in self.held.iter_mut().enumerate() {
+            *h = loads.motion(i).is_some();
+        }
+        // the factorisation redone here is the one the checkpoint's run held, not a new one
+        self.factor(model, loads)?;
+        self.stats = s;
+        Ok(())
     }
 }
 

@@ -1,6 +1,8 @@
 //! A simulation: one force model, its state, its loads and the integrator that advances them.
 //! [`Solver`] is the object-safe face the scene driver holds, whatever the model and integrator.
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::energy;
 use crate::environment::Environment;
 use crate::error::PhysicsError;
@@ -28,6 +30,10 @@ pub struct SolverStats {
     pub solve_seconds: f64,
     /// Heap bytes of the factor (implicit).
     pub factor_bytes: usize,
+    /// Accepted sub-steps (explicit with event search).
+    pub substeps: u64,
+    /// Trial sub-steps rejected and undone (explicit with event search).
+    pub rejected: u64,
 }
 
 /// An integrator: a stage that advances a [`State`] under a force model, loads and an
@@ -56,6 +62,19 @@ pub trait Integrator<M: ForceModel>: Send {
     fn stats(&self) -> SolverStats {
         SolverStats::default()
     }
+
+    /// Writes what carries from one step to the next (the explicit step's forces, the implicit
+    /// step's factored matrix inputs and counters) for a checkpoint or a snapshot.
+    fn save_state(&self, w: &mut Writer);
+
+    /// Reads what [`Integrator::save_state`] wrote, for `model` and `loads` already restored
+    /// (the implicit step refactors its matrix from what was factored then).
+    fn restore_state(
+        &mut self,
+        r: &mut Reader,
+        model: &M,
+        loads: &Loads,
+    ) -> Result<(), PhysicsError>;
 }
 
 /// Refuses rest positions or loads that are not one per particle of `n`.
@@ -154,6 +173,38 @@ impl<M: ForceModel, I: Integrator<M>> Simulation<M, I> {
     pub fn elastic_energy(&mut self) -> f64 {
         self.model.elastic_energy(&self.state.positions)
     }
+
+    /// Writes everything a step changes (state, anchors, model history, integrator buffers
+    /// that carry over) so that [`Simulation::restore`] on the same setup continues bit for
+    /// bit.
+    pub fn save(&self, w: &mut Writer) {
+        w.tag("simulation");
+        w.str(self.integrator.name());
+        self.state.save(w);
+        self.loads.save(w);
+        self.model.save_state(w);
+        self.integrator.save_state(w);
+    }
+
+    /// Reads what [`Simulation::save`] wrote; refuses one of another integrator or size.
+    pub fn restore(&mut self, r: &mut Reader) -> Result<(), PhysicsError> {
+        r.tag("simulation")?;
+        let name = r.str("integrator")?;
+        if name != self.integrator.name() {
+            return Err(CheckpointError::Invalid {
+                what: "integrator".into(),
+                message: format!(
+                    "the checkpoint was stepped {name}, this run {}",
+                    self.integrator.name()
+                ),
+            }
+            .into());
+        }
+        self.state.restore(r)?;
+        self.loads.restore(r)?;
+        self.model.restore_state(r)?;
+        self.integrator.restore_state(r, &self.model, &self.loads)
+    }
 }
 
 /// Any simulation as one object: what the scene driver holds, so that it names neither the
@@ -179,6 +230,10 @@ pub trait Solver: Send {
     fn integrator_name(&self) -> &'static str;
     /// The integrator's counters.
     fn stats(&self) -> SolverStats;
+    /// Writes the state for a checkpoint or a snapshot ([`Simulation::save`]).
+    fn save(&self, w: &mut Writer);
+    /// Restores what [`Solver::save`] wrote ([`Simulation::restore`]).
+    fn restore(&mut self, r: &mut Reader) -> Result<(), PhysicsError>;
 
     /// Current positions (m).
     fn positions(&self) -> &[Vec3] {
@@ -228,5 +283,11 @@ impl<M: ForceModel, I: Integrator<M>> Solver for Simulation<M, I> {
     }
     fn stats(&self) -> SolverStats {
         self.integrator.stats()
+    }
+    fn save(&self, w: &mut Writer) {
+        Simulation::save(self, w)
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<(), PhysicsError> {
+        Simulation::restore(self, r)
     }
 }

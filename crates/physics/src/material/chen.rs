@@ -6,12 +6,14 @@ use super::kernel::{
     dilatation, energy_density, force, return_map, AllAlive, Inputs, Isotropic, Mask, NoPlastic,
     PerBond, WithPlastic,
 };
+use super::same_features;
 use super::{ChenMaterial, ForceModel};
 use crate::error::PhysicsError;
 use crate::fracture::Damage;
 use crate::math::{mat_vec, norm, sub, Vec3, IDENTITY};
 use crate::par::{for_rows_mut, map_particles};
 use crate::particles::Discretization;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use std::f64::consts::PI;
 
 /// Choices of the Chen model fixed at setup.
@@ -343,6 +345,33 @@ impl ChenModel {
 impl ForceModel for ChenModel {
     fn num_particles(&self) -> usize {
         self.setup.disc.len()
+    }
+
+    fn save_state(&self, w: &mut Writer) {
+        w.tag("chen");
+        w.array(&self.ts);
+        w.bool(self.ep.is_some());
+        if let Some(ep) = &self.ep {
+            w.array(ep);
+        }
+        w.bool(self.damage.is_some());
+        if let Some(d) = &self.damage {
+            d.save(w);
+        }
+    }
+
+    fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("chen")?;
+        r.array_into("dilatations", &mut self.ts)?;
+        same_features("plastic extension", self.ep.is_some(), r.bool("plastic")?)?;
+        if let Some(ep) = &mut self.ep {
+            r.array_into("plastic extensions", ep)?;
+        }
+        same_features("damage", self.damage.is_some(), r.bool("fracture")?)?;
+        if let Some(d) = &mut self.damage {
+            d.restore(self.setup.disc.family(), r)?;
+        }
+        Ok(())
     }
 
     fn discretization(&self) -> &Discretization {

@@ -15,6 +15,8 @@ pub use params::{ChenMaterial, FractureParams, YieldParams};
 pub use xu::{XuKernelShape, XuModel, XuOptions};
 pub use xu_params::{XuAnisotropy, XuMaterial, XuModuli};
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::fracture::Damage;
 use crate::math::Vec3;
 use crate::particles::Discretization;
@@ -56,6 +58,19 @@ pub trait ForceModel: Send {
     fn damage(&self) -> Option<&Damage> {
         None
     }
+
+    /// Largest relative overshoot of the bonds the last [`ForceModel::break_bonds`] broke past
+    /// their threshold (0 when none broke, or without damage).
+    fn break_overshoot(&self) -> f64 {
+        self.damage().map_or(0.0, Damage::last_overshoot)
+    }
+
+    /// Writes the history that steps change (plastic extension, damage, renormalisation, the
+    /// last dilatations) for a checkpoint or a snapshot; constants come from the setup.
+    fn save_state(&self, w: &mut Writer);
+
+    /// Reads what [`ForceModel::save_state`] wrote, checked against this model's sizes.
+    fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError>;
 }
 
 impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
@@ -89,6 +104,31 @@ impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
     fn damage(&self) -> Option<&Damage> {
         (**self).damage()
     }
+    fn break_overshoot(&self) -> f64 {
+        (**self).break_overshoot()
+    }
+    fn save_state(&self, w: &mut Writer) {
+        (**self).save_state(w)
+    }
+    fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        (**self).restore_state(r)
+    }
+}
+
+/// Refuses a checkpoint whose model has a history array (`what`) this one lacks, or lacks one
+/// this one has: it was written for another scene.
+pub(crate) fn same_features(what: &str, here: bool, there: bool) -> Result<(), CheckpointError> {
+    if here == there {
+        return Ok(());
+    }
+    Err(CheckpointError::Invalid {
+        what: what.into(),
+        message: format!(
+            "the checkpoint {} it and this model {}",
+            if there { "has" } else { "lacks" },
+            if here { "has" } else { "lacks" }
+        ),
+    })
 }
 
 /// A model the implicit quasi-Newton step can drive: it has an energy whose negative gradient

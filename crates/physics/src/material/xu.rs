@@ -10,12 +10,13 @@ use super::xu_kernel::{
     bond_energy_sum, dilatation_sum, force, force_and_energy, LinearH, NeoHookeanH, PerParticleH,
     Stored, StvkH, Unit, XuInputs,
 };
-use super::{ForceModel, QuasiNewtonModel, XuMaterial};
+use super::{same_features, ForceModel, QuasiNewtonModel, XuMaterial};
 use crate::error::PhysicsError;
 use crate::fracture::Damage;
 use crate::math::{sub, Vec3};
 use crate::par::{map_particles, map_particles2};
 use crate::particles::Discretization;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 
 /// The influence function `wt(r / delta)` before normalisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -386,6 +387,35 @@ fn theta_of(inv_norm: f64, sum: f64) -> f64 {
 impl ForceModel for XuModel {
     fn num_particles(&self) -> usize {
         self.setup.disc.len()
+    }
+
+    fn save_state(&self, w: &mut Writer) {
+        w.tag("xu");
+        w.array(&self.inv_norm);
+        w.array(&self.theta);
+        w.bool(self.damage.is_some());
+        if let Some(d) = &self.damage {
+            d.save(w);
+        }
+        w.bool(self.guard.is_some());
+        if let Some(g) = &self.guard {
+            g.save(w);
+        }
+    }
+
+    fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("xu")?;
+        r.array_into("normalisations", &mut self.inv_norm)?;
+        r.array_into("dilatations", &mut self.theta)?;
+        same_features("damage", self.damage.is_some(), r.bool("fracture")?)?;
+        if let Some(d) = &mut self.damage {
+            d.restore(self.setup.disc.family(), r)?;
+        }
+        same_features("inversion guard", self.guard.is_some(), r.bool("guard")?)?;
+        if let Some(g) = &mut self.guard {
+            g.restore(r)?;
+        }
+        Ok(())
     }
 
     fn discretization(&self) -> &Discretization {

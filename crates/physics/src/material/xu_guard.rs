@@ -9,6 +9,7 @@ use super::xu::BondStiffness;
 use crate::family::Family;
 use crate::math::{norm_squared, sub, Mat3, Vec3, IDENTITY};
 use crate::par::map_particles;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use rayon::prelude::*;
 
 /// What the guard reads.
@@ -41,6 +42,31 @@ impl Guard {
             f: vec![Some(IDENTITY); n],
             factor,
         }
+    }
+
+    /// Writes the lagged gradients: a flag per particle (0 where none), then the gradients.
+    pub(crate) fn save(&self, w: &mut Writer) {
+        w.tag("guard");
+        let flags: Vec<u8> = self.f.iter().map(|f| u8::from(f.is_some())).collect();
+        w.array(&flags);
+        let f: Vec<Mat3> = self.f.iter().flatten().copied().collect();
+        w.array(&f);
+    }
+
+    /// Reads what [`Guard::save`] wrote.
+    pub(crate) fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("guard")?;
+        let mut flags = vec![0u8; self.f.len()];
+        r.array_into("guard flags", &mut flags)?;
+        let mut f: Vec<Mat3> = Vec::new();
+        r.array_vec("lagged gradients", &mut f)?;
+        let set = flags.iter().filter(|&&b| b != 0).count();
+        perifrac_checkpoint::expect_count("lagged gradients", set, f.len())?;
+        let mut next = f.into_iter();
+        for (slot, &flag) in self.f.iter_mut().zip(&flags) {
+            *slot = if flag != 0 { next.next() } else { None };
+        }
+        Ok(())
     }
 
     pub(crate) fn memory_bytes(&self) -> usize {

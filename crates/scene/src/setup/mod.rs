@@ -69,7 +69,24 @@ pub struct OutputOptions {
     pub povray: bool,
     /// Particles with damage as PLY points.
     pub particles: bool,
+    /// When to write checkpoints at frame boundaries.
+    pub checkpoints: CheckpointPolicy,
 }
+
+/// When a run writes a checkpoint at a frame boundary (an interrupted run always writes one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CheckpointPolicy {
+    /// After every `n` frames.
+    EveryFrames(usize),
+    /// After the first frame that ends this many seconds of wall time or more after the last
+    /// checkpoint (or the start).
+    EverySeconds(u64),
+    /// Only when interrupted.
+    OnInterrupt,
+}
+
+/// The wall time between checkpoints when the scene does not say (s).
+pub const DEFAULT_CHECKPOINT_SECONDS: u64 = 300;
 
 /// Facts about the prepared scene, for the summary and `run.json`.
 #[derive(Debug, Clone, PartialEq)]
@@ -349,5 +366,10 @@ fn output_options(f: &SceneFile) -> OutputOptions {
     OutputOptions {
         povray: f.output.povray.unwrap_or(true),
         particles: f.output.particles.unwrap_or(true),
+        checkpoints: match f.output.checkpoint_every {
+            None => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
+            Some(0) => CheckpointPolicy::OnInterrupt,
+            Some(n) => CheckpointPolicy::EveryFrames(n),
+        },
     }
 }

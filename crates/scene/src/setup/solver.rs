@@ -1,8 +1,10 @@
 //! The force model and the integrator the scene names, built into one [`Solver`].
 
+use perifrac_physics::integrate::event_search::MAX_LEVELS;
 use perifrac_physics::{
-    ChenModel, Discretization, Explicit, ExplicitConfig, ForceModel, Implicit, ImplicitConfig,
-    Loads, PhysicsError, Solver, TimeStep, XuKernelShape, XuModel, XuOptions,
+    ChenModel, Discretization, EventSearchConfig, Explicit, ExplicitConfig, ForceModel, Implicit,
+    ImplicitConfig, Loads, PhysicsError, Searched, Solver, TimeStep, XuKernelShape, XuModel,
+    XuOptions,
 };
 
 use crate::error::SceneError;
@@ -34,6 +36,19 @@ pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> 
             ))
         }
     };
+    let search = [
+        ("event_levels", sim.event_levels.is_some()),
+        ("force_growth", sim.force_growth.is_some()),
+        ("overshoot", sim.overshoot.is_some()),
+    ];
+    if sim.event_search != Some(true) {
+        if let Some((k, _)) = search.iter().find(|(_, given)| *given) {
+            return Err(ctx.err(
+                format!("simulation.{k}"),
+                "is a setting of the event search: add event_search = true",
+            ));
+        }
+    }
     if kind == Kind::Explicit {
         let implicit_only = [
             ("steps_per_frame", sim.steps_per_frame.is_some()),
@@ -49,6 +64,12 @@ pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> 
             ));
         }
     } else {
+        if sim.event_search == Some(true) {
+            return Err(ctx.err(
+                "simulation.event_search",
+                "refines explicit steps; the implicit step takes each frame whole",
+            ));
+        }
         if sim.safety.is_some() {
             return Err(ctx.err(
                 "simulation.safety",
@@ -142,6 +163,36 @@ pub(super) fn model(
     }
 }
 
+/// The event search's settings from `[simulation]`, each checked.
+fn search_config(ctx: &Ctx, sim: &SimulationSpec) -> Result<EventSearchConfig, SceneError> {
+    let base = EventSearchConfig::default();
+    let levels = sim.event_levels.unwrap_or(base.levels);
+    if levels > MAX_LEVELS {
+        return Err(ctx.err(
+            "simulation.event_levels",
+            format!("{levels} is more than {MAX_LEVELS} (2^{MAX_LEVELS} sub-steps per step)"),
+        ));
+    }
+    let force_growth = sim.force_growth.unwrap_or(base.force_growth);
+    // inf turns the force test off
+    if force_growth.is_nan() || force_growth <= 1.0 {
+        return Err(ctx.err(
+            "simulation.force_growth",
+            format!("{force_growth} must be a factor above 1 (inf: no force test)"),
+        ));
+    }
+    let overshoot = match sim.overshoot {
+        Some(o) => ctx.non_negative("simulation.overshoot", o)?,
+        None => base.overshoot,
+    };
+    Ok(EventSearchConfig {
+        levels,
+        force_growth,
+        overshoot,
+        ..base
+    })
+}
+
 /// Where a solver starts: at rest at `rest` (m), with `loads`, stepping `dt` (s); `horizon`
 /// (m) scales the explicit blow-up guard.
 pub(super) struct Start<'a> {
@@ -170,6 +221,17 @@ pub(super) fn build(
         dt: TimeStep::Fixed(dt),
         guard_fraction: defaults::GUARD_FRACTION,
     };
+    if sim.event_search == Some(true) {
+        let search = search_config(ctx, sim)?;
+        return Ok(match model {
+            AnyModel::Chen(m) => {
+                Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
+            }
+            AnyModel::Xu(m) => {
+                Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
+            }
+        });
+    }
     Ok(match (kind, model) {
         (Kind::Explicit, AnyModel::Chen(m)) => {
             Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
