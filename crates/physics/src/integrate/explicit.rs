@@ -6,7 +6,7 @@
 //! so the kinetic plus elastic energy it reports is conserved to O(dt^2) without drift. Both have
 //! the same stability limit `dt < 2 / omega_max`.
 
-use super::simulation::{check_lengths, Integrator, Simulation};
+use super::simulation::{check_lengths, restore_dt, Integrator, Simulation};
 use crate::environment::{Environment, External, ForcesOnly};
 use crate::error::PhysicsError;
 use crate::loads::Loads;
@@ -14,7 +14,7 @@ use crate::material::ForceModel;
 use crate::math::{dot, norm, sub, Vec3};
 use crate::stable_step::{stable_frequency, FrequencyEstimate};
 use crate::state::State;
-use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+use perifrac_checkpoint::{Reader, Writer};
 use rayon::prelude::*;
 
 /// How the step is chosen.
@@ -199,14 +199,7 @@ impl<M: ForceModel> Integrator<M> for VelocityVerlet {
 
     fn restore_state(&mut self, r: &mut Reader, _: &M, _: &Loads) -> Result<(), PhysicsError> {
         r.tag("velocity verlet")?;
-        let dt = r.f64("time step")?;
-        if dt.to_bits() != self.dt.to_bits() {
-            return Err(CheckpointError::Invalid {
-                what: "time step".into(),
-                message: format!("{dt:e} s in the checkpoint, {:e} s in this run", self.dt),
-            }
-            .into());
-        }
+        restore_dt(r, self.dt)?;
         r.array_into("forces", &mut self.f)?;
         Ok(())
     }

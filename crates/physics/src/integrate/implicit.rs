@@ -17,9 +17,9 @@
 
 use std::time::Instant;
 
-use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+use perifrac_checkpoint::{Reader, Writer};
 
-use super::simulation::{check_lengths, Integrator, Simulation, SolverStats};
+use super::simulation::{check_lengths, restore_dt, Integrator, Simulation, SolverStats};
 use super::step_matrix::{StepMatrix, HELD};
 use crate::environment::{Environment, ImplicitEnvironment};
 use crate::error::PhysicsError;
@@ -715,17 +715,7 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
         loads: &Loads,
     ) -> Result<(), PhysicsError> {
         r.tag("quasi-newton")?;
-        let dt = r.f64("time step")?;
-        if dt.to_bits() != self.config.dt.to_bits() {
-            return Err(CheckpointError::Invalid {
-                what: "time step".into(),
-                message: format!(
-                    "{dt:e} s in the checkpoint, {:e} s in this run",
-                    self.config.dt
-                ),
-            }
-            .into());
-        }
+        restore_dt(r, self.config.dt)?;
         r.array_into("bond stiffness", &mut self.bond_k)?;
         r.array_into("factored curvature", &mut self.factored_curvature)?;
         r.array_into("contact curvature", &mut self.env_curvature)?;

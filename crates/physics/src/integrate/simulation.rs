@@ -77,6 +77,19 @@ pub trait Integrator<M: ForceModel>: Send {
     ) -> Result<(), PhysicsError>;
 }
 
+/// Reads a saved step length and refuses one that is not `dt` (s) to the bit.
+pub(crate) fn restore_dt(r: &mut Reader, dt: f64) -> Result<(), PhysicsError> {
+    let saved = r.f64("time step")?;
+    if saved.to_bits() == dt.to_bits() {
+        return Ok(());
+    }
+    Err(CheckpointError::Invalid {
+        what: "time step".into(),
+        message: format!("{saved:e} s in the checkpoint, {dt:e} s in this run"),
+    }
+    .into())
+}
+
 /// Refuses rest positions or loads that are not one per particle of `n`.
 pub(crate) fn check_lengths(n: usize, rest: &[Vec3], loads: &Loads) -> Result<(), PhysicsError> {
     if rest.len() != n || loads.len() != n {
