@@ -1,7 +1,8 @@
 //! The harness itself on its tiny cases: every accuracy row has a finite error, refining the
 //! cantilever does not make it worse, the motion cases carry every method (Chen and Xu
 //! explicit, Xu implicit at 1, 4 and 16 steps per frame) and Xu's static cases their implicit
-//! runs, no stability case ends in a NaN or a panic, and the speed tables hold positive rates.
+//! runs, no stability case ends in a NaN or a panic, the speed tables hold positive rates, and
+//! the event-search report holds its five runs.
 //! (The measurements are in BENCHMARKS.md, made with the full cases; timings are never
 //! asserted.)
 
@@ -176,4 +177,27 @@ fn plots_are_written_as_png() {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     // Nothing but the picture is left behind.
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn the_event_search_report_holds_every_run_and_the_search_does_extra_work() {
+    let (table, plot, _) = perifrac_bench::events::impact(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(
+        table.rows.len(),
+        5,
+        "fixed, search, bond test only, equal cost, reference"
+    );
+    let evaluations: Vec<u64> = table.rows.iter().map(|r| r[2].parse().unwrap()).collect();
+    // the search tries more sub-steps than the fixed step takes, the reference the most
+    assert!(evaluations[1] > evaluations[0], "{evaluations:?}");
+    assert!(evaluations[4] > evaluations[0], "{evaluations:?}");
+    // the reference shares all its broken bonds with itself, every run some
+    let shared: Vec<f64> = table.rows.iter().map(|r| r[8].parse().unwrap()).collect();
+    assert_eq!(shared[4], 1.0);
+    assert!(shared.iter().all(|&s| s > 0.0 && s <= 1.0), "{shared:?}");
+    assert_eq!(
+        plot.series.len(),
+        4,
+        "every run but the reference against it"
+    );
 }
