@@ -158,7 +158,8 @@ impl Checkpoint {
                         "not found, nor run.json: this is not a run directory".into()
                     ));
                 };
-                let finished = manifest.contains("\"finished\": true");
+                let finished = serde_json::from_str::<serde_json::Value>(&manifest)
+                    .is_ok_and(|m| m["finished"] == serde_json::Value::Bool(true));
                 return Err(bad(if finished {
                     "not found: the run in this directory finished, there is nothing to resume"
                         .into()

@@ -167,6 +167,9 @@ impl<M: ForceModel> Integrator<M> for EventSearch {
         let full = 1u64 << levels;
         let mut done = 0u64;
         self.broken.clear();
+        // the largest force at the start of the next trial: an undone trial restores the forces
+        // it started from, an accepted one leaves its own
+        let mut before = largest(&self.inner.f);
         while done < full {
             let units = (full >> self.k).min(full - done);
             let trial = self.k < levels;
@@ -178,7 +181,6 @@ impl<M: ForceModel> Integrator<M> for EventSearch {
                 self.env_snapshot.clear();
                 env.save(&mut self.env_snapshot);
             }
-            let before = largest(&self.inner.f);
             self.inner.dt = self.dt * units as f64 / full as f64;
             state.time = t0 + self.dt * done as f64 / full as f64;
             let stepped = self.inner.advance(model, state, loads, env);
@@ -201,6 +203,7 @@ impl<M: ForceModel> Integrator<M> for EventSearch {
             self.broken
                 .extend_from_slice(Integrator::<M>::broken(&self.inner));
             self.peak = self.peak.max(after);
+            before = after;
             done += units;
             self.stats.substeps += 1;
             self.k = self.k.saturating_sub(1);
