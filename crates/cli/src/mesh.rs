@@ -6,47 +6,11 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 use perifrac_io::TetFormat;
-use perifrac_topology::mesher::{
-    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, MesherOptions, MesherReport,
-};
+use perifrac_topology::mesher::{estimated_tets, mesh_surface, MesherOptions, MesherReport};
+use perifrac_topology::spec::{parse_primitive, parse_round};
 use perifrac_topology::{primitives, TetMesh};
 
 use crate::load::to_data;
-
-/// A parsed primitive spec such as `box:1x0.2x1`.
-#[derive(Debug, PartialEq)]
-pub struct Primitive {
-    /// Extent along x, y, z in metres.
-    pub size: [f64; 3],
-}
-
-/// Parses `box:LXxLYxLZ` or `bar:LxWxH` (both are axis-aligned boxes from the origin).
-pub fn parse_primitive(spec: &str) -> Result<Primitive> {
-    let Some((kind, dims)) = spec.split_once(':') else {
-        bail!(
-            "`{spec}` is neither an existing surface file (.obj, .ply, .off) nor a primitive \
-             spec; expected `box:LXxLYxLZ`, `bar:LxWxH`, `sphere:R` or `cylinder:RxH`"
-        );
-    };
-    if kind != "box" && kind != "bar" {
-        bail!("unknown primitive `{kind}` in `{spec}`; known: box, bar, sphere, cylinder");
-    }
-    let parts: Vec<&str> = dims.split('x').collect();
-    if parts.len() != 3 {
-        bail!("`{spec}`: expected three sizes separated by `x`, e.g. {kind}:1x0.2x0.5");
-    }
-    let mut size = [0.0; 3];
-    for (s, p) in size.iter_mut().zip(&parts) {
-        *s = p
-            .trim()
-            .parse::<f64>()
-            .with_context(|| format!("`{spec}`: `{p}` is not a number"))?;
-        if !s.is_finite() || *s <= 0.0 {
-            bail!("`{spec}`: sizes must be positive and finite, found {p}");
-        }
-    }
-    Ok(Primitive { size })
-}
 
 /// Cell counts: explicit, or `resolution` cells across the longest side, others in proportion.
 pub fn cell_counts(
@@ -164,44 +128,6 @@ fn mesh_and_write(
         mesh_surface(vertices, faces, &opts).with_context(|| format!("cannot mesh {what}"))?;
     print_report(&out.report);
     write_mesh(output, out.vertices, out.tets, format)
-}
-
-/// A triangle surface as vertex positions and faces.
-pub type SurfaceArrays = (Vec<[f64; 3]>, Vec<[u32; 3]>);
-
-/// Facets of the round primitives' surfaces: rings of the sphere, sides of the cylinder.
-const ROUND_SEGMENTS: usize = 64;
-
-/// Parses `sphere:R` (about the origin) or `cylinder:RxH` (along z from the origin) into a
-/// closed surface; `None` for any other spec.
-pub fn parse_round(spec: &str) -> Result<Option<SurfaceArrays>> {
-    let Some((kind, dims)) = spec.split_once(':') else {
-        return Ok(None);
-    };
-    let expected = match kind {
-        "sphere" => 1,
-        "cylinder" => 2,
-        _ => return Ok(None),
-    };
-    let mut sizes = Vec::new();
-    for p in dims.split('x') {
-        let x = p
-            .trim()
-            .parse::<f64>()
-            .with_context(|| format!("`{spec}`: `{p}` is not a number"))?;
-        if !x.is_finite() || x <= 0.0 {
-            bail!("`{spec}`: sizes must be positive and finite, found {p}");
-        }
-        sizes.push(x);
-    }
-    if sizes.len() != expected {
-        bail!("`{spec}`: expected sphere:RADIUS or cylinder:RADIUSxHEIGHT");
-    }
-    Ok(Some(if kind == "sphere" {
-        sphere_surface(sizes[0], ROUND_SEGMENTS)
-    } else {
-        cylinder_surface(sizes[0], sizes[1], 2 * ROUND_SEGMENTS)
-    }))
 }
 
 /// Builds the topology (which checks orientation), writes the mesh and prints the summary.
@@ -365,28 +291,6 @@ fn run_primitive(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn parses_box_and_rejects_nonsense() {
-        assert_eq!(
-            parse_primitive("box:1x0.2x3").unwrap().size,
-            [1.0, 0.2, 3.0]
-        );
-        assert!(parse_primitive("box:1x0.2").is_err());
-        assert!(parse_primitive("box:1x-2x3").is_err());
-        assert!(parse_primitive("box:1xNaNx3").is_err());
-        assert!(parse_primitive("ball:1x1x1").is_err());
-        assert!(parse_primitive("bunny.off").is_err());
-    }
-
-    #[test]
-    fn parses_round_primitives() {
-        assert!(parse_round("sphere:0.5").unwrap().is_some());
-        assert!(parse_round("cylinder:0.5x2").unwrap().is_some());
-        assert!(parse_round("box:1x1x1").unwrap().is_none());
-        assert!(parse_round("sphere:1x2").is_err());
-        assert!(parse_round("cylinder:-1x2").is_err());
-    }
 
     #[test]
     fn resolution_spreads_cells_in_proportion() {

@@ -33,8 +33,8 @@ pub use data::{SurfaceData, SurfaceRef, TetMeshData};
 pub use error::IoError;
 pub use format::TetFormat;
 pub use obj::write_obj;
-pub use ply_points::{read_ply_points, write_ply_points, PointCloud};
-pub use ply_read::read_ply_crack;
+pub use ply_points::{parse_ply_points, read_ply_points, write_ply_points, PointCloud};
+pub use ply_read::{parse_ply_crack, read_ply_crack};
 pub use ply_write::{write_ply, PlyEncoding};
 pub use povray::write_povray_mesh2;
 
@@ -54,6 +54,33 @@ pub fn read_tet_mesh(path: &Path) -> Result<TetMeshData, IoError> {
         TetFormat::Gmsh22 | TetFormat::Gmsh41 => gmsh_read::read(path),
         TetFormat::Vtk => vtk::read(path),
     }
+}
+
+/// Parses the bytes of a one-file tet mesh (Medit, Gmsh, VTK), choosing the reader from the
+/// extension of `path`, which only names the file in errors. A TetGen mesh is several files:
+/// see [`parse_tetgen`].
+pub fn parse_tet_mesh(path: &Path, data: &[u8]) -> Result<TetMeshData, IoError> {
+    match TetFormat::from_path(path)? {
+        TetFormat::TetGen => Err(IoError::invalid(
+            path,
+            "a TetGen mesh is a .node and an .ele file (and an optional .face): parse them \
+             with parse_tetgen",
+        )),
+        TetFormat::Medit => medit::parse(path, data),
+        TetFormat::Gmsh22 | TetFormat::Gmsh41 => gmsh_read::parse(path, data),
+        TetFormat::Vtk => vtk::parse(path, data),
+    }
+}
+
+/// Parses the bytes of a TetGen mesh: its `.node`, `.ele` and optional `.face` files. `path`
+/// (either file's name) names the files in errors, with the extension of the one at fault.
+pub fn parse_tetgen(
+    path: &Path,
+    node: &[u8],
+    ele: &[u8],
+    face: Option<&[u8]>,
+) -> Result<TetMeshData, IoError> {
+    tetgen::parse_all(path, node, ele, face)
 }
 
 /// The file whose lines [`TetMeshData::tet_lines`] counts for a mesh read from `path`: the
@@ -82,14 +109,30 @@ pub fn write_tet_mesh(path: &Path, mesh: &TetMeshData, format: TetFormat) -> Res
 /// Polygons are fan-triangulated. A file without vertices or without faces is an error: it is
 /// no surface.
 pub fn read_surface(path: &Path) -> Result<SurfaceData, IoError> {
-    let surface = match format::extension(path).as_deref() {
-        Some("obj") => obj::read(path),
-        Some("ply") => read_ply_crack(path).map(|(s, _)| s),
-        Some("off") => off::read(path),
+    surface_extension(path)?;
+    parse_surface(path, &error::read_all(path)?)
+}
+
+/// The surface reader's extension of `path`, refusing one it does not read.
+fn surface_extension(path: &Path) -> Result<&'static str, IoError> {
+    match format::extension(path).as_deref() {
+        Some("obj") => Ok("obj"),
+        Some("ply") => Ok("ply"),
+        Some("off") => Ok("off"),
         _ => Err(IoError::UnknownExtension {
             file: path.to_path_buf(),
             known: SURFACE_IN,
         }),
+    }
+}
+
+/// [`read_surface`] on the bytes of a surface file, the reader chosen from the extension of
+/// `path`, which only names the file in errors.
+pub fn parse_surface(path: &Path, data: &[u8]) -> Result<SurfaceData, IoError> {
+    let surface = match surface_extension(path)? {
+        "obj" => obj::parse(path, data),
+        "ply" => parse_ply_crack(path, data).map(|(s, _)| s),
+        _ => off::parse(path, data),
     }?;
     let empty = |what: &str| IoError::Format {
         file: path.to_path_buf(),

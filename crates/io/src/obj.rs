@@ -1,18 +1,16 @@
 //! Wavefront OBJ: reader (through tobj) and writer.
 
-use crate::error::read_all;
 use crate::numfmt::{write_f64, write_xyz};
 use crate::{atomic_write, IoError, SurfaceData, SurfaceRef};
 use std::io::Write;
 use std::path::Path;
 
-/// Reads an OBJ with tobj (polygons triangulated); all objects/groups are merged into one
-/// surface. Points and lines are ignored. The vertex and face lines are checked first, with
-/// their line numbers ([`check_lines`]): tobj's own errors carry none.
-pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
-    // tobj reports a missing file without the OS error; reading it first gives the OS error.
-    let text = read_all(path)?;
-    check_lines(path, &text)?;
+/// Parses the bytes of an OBJ with tobj (polygons triangulated); all objects/groups are merged
+/// into one surface. Points, lines and materials are ignored (no `mtllib` file is opened). The
+/// vertex and face lines are checked first, with their line numbers ([`check_lines`]): tobj's
+/// own errors carry none.
+pub(crate) fn parse(path: &Path, text: &[u8]) -> Result<SurfaceData, IoError> {
+    check_lines(path, text)?;
     // Other tobj features (merging, reordering) add fields; keep the struct update for them.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -22,10 +20,14 @@ pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
         ignore_lines: true,
         ..Default::default()
     };
-    let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| IoError::Format {
-        file: path.to_path_buf(),
-        message: format!("not a readable OBJ file: {e}"),
-    })?;
+    let mut reader = text;
+    // Materials are not used: every `mtllib` resolves to "no materials".
+    let no_materials = |_: &Path| Ok((Vec::new(), Default::default()));
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut reader, &options, no_materials).map_err(|e| IoError::Format {
+            file: path.to_path_buf(),
+            message: format!("not a readable OBJ file: {e}"),
+        })?;
     let mut surface = SurfaceData::default();
     for model in &models {
         let mesh = &model.mesh;
@@ -68,21 +70,32 @@ pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
     Ok(surface)
 }
 
+/// The kinds of OBJ element a face corner refers to, in corner order `v/vt/vn`.
+const CORNER_PARTS: [(&str, &str); 3] = [
+    ("v", "vertex"),
+    ("vt", "texture coordinate"),
+    ("vn", "normal"),
+];
+
 /// Checks every `v` line (three finite coordinates) and `f` line (at least three corners, each
-/// starting with the number of an existing vertex: 1-based, or negative, counted back from the
-/// last vertex so far) of an OBJ, reporting the 1-based line of the first problem.
+/// `v`, `v/vt`, `v//vn` or `v/vt/vn` with numbers of existing elements: 1-based, or negative,
+/// counted back from the last element so far) of an OBJ, reporting the 1-based line of the
+/// first problem. tobj trusts texture and normal numbers (an absurd one overflows its index
+/// arithmetic), so they are checked here although only positions are read.
 fn check_lines(path: &Path, text: &[u8]) -> Result<(), IoError> {
-    let is_vertex = |raw: &[u8]| {
-        let mut words = raw
+    let keyword = |raw: &[u8]| -> Option<usize> {
+        let first = raw
             .split(|b| b.is_ascii_whitespace())
-            .filter(|w| !w.is_empty());
-        words.next() == Some(&b"v"[..])
+            .find(|w| !w.is_empty())?;
+        CORNER_PARTS.iter().position(|(k, _)| k.as_bytes() == first)
     };
-    let total = text
-        .split(|&b| b == b'\n')
-        .filter(|l| is_vertex(&l[..]))
-        .count();
-    let mut seen = 0usize;
+    let mut total = [0usize; 3];
+    for raw in text.split(|&b| b == b'\n') {
+        if let Some(k) = keyword(raw) {
+            total[k] += 1;
+        }
+    }
+    let mut seen = [0usize; 3];
     for (k, raw) in text.split(|&b| b == b'\n').enumerate() {
         let line = k + 1;
         let err = |message: String| IoError::parse(path, line, message);
@@ -92,46 +105,32 @@ fn check_lines(path: &Path, text: &[u8]) -> Result<(), IoError> {
         let mut words = s.split_whitespace();
         match words.next() {
             Some("v") => {
-                seen += 1;
+                seen[0] += 1;
+                let n = seen[0];
                 for axis in ["x", "y", "z"] {
                     let Some(w) = words.next() else {
                         return Err(err(format!(
-                            "vertex {seen} has no {axis} coordinate (expected v x y z)"
+                            "vertex {n} has no {axis} coordinate (expected v x y z)"
                         )));
                     };
                     let x: f64 = w.parse().map_err(|_| {
                         err(format!(
-                            "vertex {seen}: the {axis} coordinate \"{w}\" is not a number"
+                            "vertex {n}: the {axis} coordinate \"{w}\" is not a number"
                         ))
                     })?;
                     if !x.is_finite() {
                         return Err(err(format!(
-                            "vertex {seen}: the {axis} coordinate is NaN/infinite (found \"{w}\")"
+                            "vertex {n}: the {axis} coordinate is NaN/infinite (found \"{w}\")"
                         )));
                     }
                 }
             }
+            Some("vt") => seen[1] += 1,
+            Some("vn") => seen[2] += 1,
             Some("f") => {
                 let mut corners = 0;
                 for w in words {
-                    let first = w.split('/').next().unwrap_or("");
-                    let i: i64 = first.parse().map_err(|_| {
-                        err(format!(
-                            "face corner \"{w}\" does not start with a vertex number"
-                        ))
-                    })?;
-                    let exists = match i {
-                        0 => false,
-                        i if i > 0 => i.unsigned_abs() <= total as u64,
-                        i => i.unsigned_abs() <= seen as u64,
-                    };
-                    if !exists {
-                        return Err(err(format!(
-                            "face corner \"{w}\": there is no vertex {i} (the file has {total} \
-                             vertices, {seen} before this line; indices start at 1, negative \
-                             ones count back)"
-                        )));
-                    }
+                    check_corner(w, &total, &seen).map_err(&err)?;
                     corners += 1;
                 }
                 if corners < 3 {
@@ -141,6 +140,44 @@ fn check_lines(path: &Path, text: &[u8]) -> Result<(), IoError> {
                 }
             }
             _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Checks one face corner `w` against the file's element counts (`total`) and those before
+/// its line (`seen`), in `v, vt, vn` order; the message says what is wrong.
+fn check_corner(w: &str, total: &[usize; 3], seen: &[usize; 3]) -> Result<(), String> {
+    let parts: Vec<&str> = w.split('/').collect();
+    if parts.len() > 3 {
+        return Err(format!(
+            "face corner \"{w}\" has {} parts (expected v, v/vt, v//vn or v/vt/vn)",
+            parts.len()
+        ));
+    }
+    for (k, part) in parts.iter().enumerate() {
+        let (_, name) = CORNER_PARTS[k];
+        if part.is_empty() && k > 0 {
+            continue;
+        }
+        let i: i64 = part.parse().map_err(|_| {
+            if k == 0 {
+                format!("face corner \"{w}\" does not start with a vertex number")
+            } else {
+                format!("face corner \"{w}\": its {name} number \"{part}\" is not a number")
+            }
+        })?;
+        let exists = match i {
+            0 => false,
+            i if i > 0 => i.unsigned_abs() <= total[k] as u64,
+            i => i.unsigned_abs() <= seen[k] as u64,
+        };
+        if !exists {
+            return Err(format!(
+                "face corner \"{w}\": there is no {name} {i} (the file has {} {name}s, {} \
+                 before this line; indices start at 1, negative ones count back)",
+                total[k], seen[k]
+            ));
         }
     }
     Ok(())
@@ -184,7 +221,7 @@ mod tests {
     }
 
     const CUBE_CORNER: &str = "# a tet\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n\
-                               f 1 3 2\nf 1 2 4\nf 2 3 4\nf -4/1 -1/1/1 -2//1\n";
+                               f 1 3 2\nf 1 2 4\nf 2 3 4\nf -4/1 -1/1/1 -2//1\nvt 0 0\nvn 0 0 1\n";
 
     #[test]
     fn good_lines_pass() {
@@ -219,5 +256,31 @@ mod tests {
         );
         let e = check(&CUBE_CORNER.replace("f 1 3 2", "f 0 3 2")).unwrap_err();
         assert!(e.starts_with("m.obj:6: "), "{e}");
+    }
+
+    #[test]
+    fn texture_and_normal_numbers_are_checked() {
+        // Found by the read_obj fuzz target: a normal number counted back past the start
+        // overflowed tobj's index arithmetic (a panic with overflow checks on).
+        let e = check(&CUBE_CORNER.replace("-2//1", "-2//-3")).unwrap_err();
+        assert!(
+            e.starts_with("m.obj:9: face corner \"-2//-3\": there is no normal -3"),
+            "{e}"
+        );
+        let e = check(&CUBE_CORNER.replace("-4/1 ", "-4/2 ")).unwrap_err();
+        assert!(e.contains("there is no texture coordinate 2"), "{e}");
+        let e = check(&CUBE_CORNER.replace("-4/1 ", "-4/1/1/1 ")).unwrap_err();
+        assert!(e.contains("has 4 parts"), "{e}");
+        let e = check(&CUBE_CORNER.replace("-4/1 ", "-4/a ")).unwrap_err();
+        assert!(
+            e.contains("texture coordinate number \"a\" is not a number"),
+            "{e}"
+        );
+        // The same file through the whole reader gives the same line.
+        let text = CUBE_CORNER.replace("-2//1", "-2//-3");
+        let e = parse(Path::new("m.obj"), text.as_bytes())
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("m.obj:9: "), "{e}");
     }
 }

@@ -4,15 +4,9 @@
 //! `x y z`, faces `k i1 .. ik` (0-based), each optionally followed by colour values. `#`
 //! comments. Polygons are fan-triangulated.
 
-use crate::error::read_all;
 use crate::tokens::Tokens;
 use crate::{IoError, SurfaceData};
 use std::path::Path;
-
-/// Reads an `.off` file.
-pub(crate) fn read(path: &Path) -> Result<SurfaceData, IoError> {
-    parse(path, &read_all(path)?)
-}
 
 /// Parses the bytes of an `.off` file.
 pub(crate) fn parse(path: &Path, data: &[u8]) -> Result<SurfaceData, IoError> {

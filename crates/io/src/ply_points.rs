@@ -85,8 +85,12 @@ pub fn write_ply_points(
 /// property as a named scalar; a NaN or infinite coordinate is an error naming the point
 /// (counted from 1).
 pub fn read_ply_points(path: &Path) -> Result<PointCloud, IoError> {
-    let file = std::fs::File::open(path).map_err(|e| IoError::io(path, e))?;
-    let mut reader = std::io::BufReader::new(file);
+    parse_ply_points(path, &crate::error::read_all(path)?)
+}
+
+/// [`read_ply_points`] on the bytes of a PLY file; `path` only names it in errors.
+pub fn parse_ply_points(path: &Path, data: &[u8]) -> Result<PointCloud, IoError> {
+    let mut reader = data;
     let ply = Parser::<DefaultElement>::new()
         .read_ply(&mut reader)
         .map_err(|e| IoError::invalid(path, e.to_string()))?;

@@ -15,8 +15,15 @@ use std::path::Path;
 /// NaN and infinite coordinates are refused: by line in an ASCII file (one element per line,
 /// as the format has it), by vertex number (from 1) in a binary one.
 pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoError> {
-    let data = read_all(path)?;
-    let mut reader = data.as_slice();
+    parse_ply_crack(path, &read_all(path)?)
+}
+
+/// [`read_ply_crack`] on the bytes of a PLY file; `path` only names it in errors.
+pub fn parse_ply_crack(
+    path: &Path,
+    data: &[u8],
+) -> Result<(SurfaceData, Option<Vec<u8>>), IoError> {
+    let mut reader = data;
     let parser = Parser::<DefaultElement>::new();
     let ply = parser.read_ply(&mut reader).map_err(|e| {
         let text = e.to_string();
@@ -47,7 +54,7 @@ pub fn read_ply_crack(path: &Path) -> Result<(SurfaceData, Option<Vec<u8>>), IoE
             if !p.iter().all(|c| c.is_finite()) {
                 let n = vertices.len();
                 let message = format!("vertex {} of {n} has a non-finite coordinate {p:?}", i + 1);
-                return Err(match first_line_of(&data, &ply.header, "vertex") {
+                return Err(match first_line_of(data, &ply.header, "vertex") {
                     Some(first) => IoError::parse(path, first + i, message),
                     None => format_error(path, message),
                 });

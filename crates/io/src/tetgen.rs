@@ -19,13 +19,28 @@ pub(crate) fn read(path: &Path) -> Result<TetMeshData, IoError> {
     let ele_path = path.with_extension("ele");
     let node_data = read_sibling(&node_path, path)?;
     let ele_data = read_sibling(&ele_path, path)?;
-    let (vertices, base) = parse_node(&node_path, &node_data)?;
-    let mut mesh = parse_ele(&ele_path, &ele_data, vertices.len(), base)?;
-    mesh.vertices = vertices;
     let face_path = path.with_extension("face");
-    if face_path.is_file() {
-        let face_data = read_all(&face_path)?;
-        mesh.boundary_faces = parse_face(&face_path, &face_data, mesh.vertices.len(), base)?;
+    let face_data = if face_path.is_file() {
+        Some(read_all(&face_path)?)
+    } else {
+        None
+    };
+    parse_all(path, &node_data, &ele_data, face_data.as_deref())
+}
+
+/// Parses the three files' bytes; errors name `path` with each file's extension.
+pub(crate) fn parse_all(
+    path: &Path,
+    node: &[u8],
+    ele: &[u8],
+    face: Option<&[u8]>,
+) -> Result<TetMeshData, IoError> {
+    let (vertices, base) = parse_node(&path.with_extension("node"), node)?;
+    let mut mesh = parse_ele(&path.with_extension("ele"), ele, vertices.len(), base)?;
+    mesh.vertices = vertices;
+    if let Some(face) = face {
+        let face_path = path.with_extension("face");
+        mesh.boundary_faces = parse_face(&face_path, face, mesh.vertices.len(), base)?;
     }
     Ok(mesh)
 }

@@ -19,6 +19,7 @@ mod persist;
 mod pieces;
 pub mod primitives;
 mod quality;
+pub mod spec;
 mod split;
 mod surface;
 
