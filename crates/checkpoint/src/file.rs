@@ -7,7 +7,8 @@ use crate::{CheckpointError, Reader, Writer};
 pub const MAGIC: &[u8; 8] = b"PFCKPT\r\n";
 
 /// The layout version this build writes and reads; a file of another version is refused.
-pub const FORMAT_VERSION: u32 = 1;
+/// 2: the driver's self-contact counters.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// What a checkpoint says about itself.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -123,9 +124,13 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("not a perifrac"));
-        let mut v2 = bytes.clone();
-        v2[8] = 2;
-        assert!(open(&v2).unwrap_err().to_string().contains("version 2"));
+        let mut other = bytes.clone();
+        other[8..12].copy_from_slice(&(FORMAT_VERSION + 1).to_le_bytes());
+        let e = open(&other).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("version {}", FORMAT_VERSION + 1)),
+            "{e}"
+        );
         // the checksum covers the header and the body: every single-byte change is caught
         for k in 12..bytes.len() {
             let mut b = bytes.clone();

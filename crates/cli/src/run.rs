@@ -197,6 +197,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
             String::new()
         }
     );
+    if let Some((builds, deepest)) = summary.self_contact {
+        eprintln!(
+            "self contact: up to {} pairs touching, deepest overlap {:.3e} m ({:.1}% of a \
+             contact distance), pair list built {builds} times",
+            deepest.pairs,
+            deepest.max_overlap,
+            100.0 * deepest.max_overlap_share
+        );
+    }
     if summary.integrator == "event_search" {
         let s = summary.solver;
         eprintln!(

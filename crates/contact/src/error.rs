@@ -93,4 +93,7 @@ pub enum ContactError {
         /// The offending value.
         value: f64,
     },
+    /// Self contact was given inconsistent inputs (array lengths).
+    #[error("self contact: {0}")]
+    BadSelfContact(String),
 }

@@ -11,7 +11,11 @@
 //! For an implicit integrator, [`Colliders::begin_implicit`], [`Colliders::implicit_potential`]
 //! and [`Colliders::end_implicit`] give contact as an incremental potential over the particles'
 //! end positions and the dynamic balls' end centres (damping and friction as lagged
-//! dissipative potentials). This crate does not know the physics crate.
+//! dissipative potentials).
+//!
+//! [`SelfContact`] pushes apart particles of the body that share no intact bond (fragments,
+//! the faces of a crack), from a Verlet list of nearby pairs, in explicit steps. This crate
+//! does not know the physics crate.
 
 mod colliders;
 mod desc;
@@ -20,6 +24,7 @@ mod implicit;
 mod incremental;
 mod kernel;
 mod math;
+mod pairs;
 mod params;
 mod persist;
 mod step;
@@ -28,6 +33,7 @@ mod surface;
 pub use colliders::{BallState, Colliders, GroundState};
 pub use desc::{BallDesc, BallMotion, GroundDesc};
 pub use error::ContactError;
+pub use pairs::{SelfContact, SelfContactParams, SelfContactStats, MAX_TOUCHING};
 pub use params::ContactParams;
 pub use step::ContactStats;
 

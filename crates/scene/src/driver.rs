@@ -5,10 +5,10 @@
 use std::time::{Duration, Instant};
 
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
-use perifrac_contact::{Colliders, ContactStats};
+use perifrac_contact::{Colliders, ContactStats, SelfContact, SelfContactStats};
 use perifrac_physics::math::Vec3;
 use perifrac_physics::{
-    Environment, External, ImplicitEnvironment, NoEnvironment, PhysicsError, Solver,
+    Environment, External, Family, ImplicitEnvironment, NoEnvironment, PhysicsError, Solver,
 };
 use perifrac_topology::TetMesh;
 
@@ -47,6 +47,8 @@ pub struct StepReport {
     pub crack_faces: usize,
     /// Contacts found in this step.
     pub contact: ContactStats,
+    /// Contact between particles in this step (zero without self contact).
+    pub self_contact: SelfContactStats,
 }
 
 /// The simulation state of a running scene: the embedded mesh, the peridynamic solver (any
@@ -56,12 +58,16 @@ pub struct Driver {
     mesh: TetMesh,
     solver: Box<dyn Solver>,
     colliders: Option<Colliders>,
+    self_contact: Option<SelfContact>,
     radii: Vec<f64>,
     /// Anchors to release, sorted by time.
     releases: Releases,
     next_release: usize,
     broken_bonds: u64,
     crack_faces: u64,
+    /// Self contact: the deepest overlap so far and the last step's statistics.
+    self_deepest: SelfContactStats,
+    self_last: SelfContactStats,
     times: StageTimes,
 }
 
@@ -72,6 +78,7 @@ impl Driver {
         mesh: TetMesh,
         solver: Box<dyn Solver>,
         colliders: Option<Colliders>,
+        self_contact: Option<SelfContact>,
         radii: Vec<f64>,
         mut releases: Releases,
     ) -> Driver {
@@ -80,11 +87,14 @@ impl Driver {
             mesh,
             solver,
             colliders,
+            self_contact,
             radii,
             releases,
             next_release: 0,
             broken_bonds: 0,
             crack_faces: 0,
+            self_deepest: SelfContactStats::default(),
+            self_last: SelfContactStats::default(),
             times: StageTimes::default(),
         }
     }
@@ -97,12 +107,33 @@ impl Driver {
             mesh,
             solver,
             colliders,
+            self_contact,
             radii,
             times,
             ..
         } = self;
         let t0 = Instant::now();
-        let (broken, contact) = physics_with_contact(solver.as_mut(), colliders.as_mut(), radii)?;
+        if let Some(sc) = self_contact.as_mut() {
+            let model = solver.model();
+            let family = model.discretization().family();
+            let state = model.damage().map(|d| d.bond_state());
+            let bonded = |i: u32, j: u32| intact_both_ways(family, state, i, j);
+            sc.prepare(
+                solver.positions(),
+                solver.velocities(),
+                solver.dt(),
+                &bonded,
+            );
+        }
+        let (broken, contact, self_stats) = physics_with_contact(
+            solver.as_mut(),
+            colliders.as_mut(),
+            self_contact.as_ref(),
+            radii,
+        )?;
+        if let Some(sc) = self_contact.as_mut() {
+            sc.unbond(broken);
+        }
         let t1 = Instant::now();
         let broken_bonds = broken.len();
         let crack_faces = cut(mesh, broken);
@@ -116,8 +147,14 @@ impl Driver {
             broken_bonds,
             crack_faces,
             contact,
+            self_contact: self_stats,
         };
         self.broken_bonds += report.broken_bonds as u64;
+        self.self_last = self_stats;
+        let deepest = &mut self.self_deepest;
+        deepest.pairs = deepest.pairs.max(self_stats.pairs);
+        deepest.max_overlap = deepest.max_overlap.max(self_stats.max_overlap);
+        deepest.max_overlap_share = deepest.max_overlap_share.max(self_stats.max_overlap_share);
         self.crack_faces += crack_faces as u64;
         Ok(report)
     }
@@ -133,6 +170,22 @@ impl Driver {
             let _ = self.solver.loads_mut().release(particles);
             self.next_release += 1;
         }
+    }
+
+    /// Contact between particles, when the scene has it.
+    pub fn self_contact(&self) -> Option<&SelfContact> {
+        self.self_contact.as_ref()
+    }
+
+    /// Self contact over the run so far: the most pairs in contact in one step and the
+    /// deepest overlap (m, and as a share of its pair's contact distance); zeros without it.
+    pub fn self_contact_deepest(&self) -> SelfContactStats {
+        self.self_deepest
+    }
+
+    /// Self contact in the last step; zeros without it.
+    pub fn self_contact_last(&self) -> SelfContactStats {
+        self.self_last
     }
 
     /// The embedded tet mesh, cut and advected so far.
@@ -205,6 +258,14 @@ impl Driver {
         if let Some(c) = &self.colliders {
             c.save(w);
         }
+        w.bool(self.self_contact.is_some());
+        if self.self_contact.is_some() {
+            for st in [self.self_deepest, self.self_last] {
+                w.usize(st.pairs);
+                w.f64(st.max_overlap);
+                w.f64(st.max_overlap_share);
+            }
+        }
     }
 
     /// Reads what [`Driver::save`] wrote into a driver made by the same setup.
@@ -235,6 +296,10 @@ impl Driver {
         };
         self.mesh.restore(r)?;
         self.solver.restore(r)?;
+        // The pair list is derived from positions and bonds: built again at the next step.
+        if let Some(sc) = &mut self.self_contact {
+            sc.invalidate();
+        }
         let has = r.bool("colliders")?;
         match (&mut self.colliders, has) {
             (Some(c), true) => c.restore(r)?,
@@ -251,6 +316,29 @@ impl Driver {
                 .into())
             }
         }
+        let has = r.bool("self contact")?;
+        if has != self.self_contact.is_some() {
+            return Err(CheckpointError::Invalid {
+                what: "self contact".into(),
+                message: format!(
+                    "the checkpoint {} self contact and this scene {}",
+                    if has { "has" } else { "has no" },
+                    if has { "has none" } else { "has" }
+                ),
+            }
+            .into());
+        }
+        if has {
+            let mut read = || -> Result<SelfContactStats, CheckpointError> {
+                Ok(SelfContactStats {
+                    pairs: r.usize("self contact pairs")?,
+                    max_overlap: r.f64("self contact overlap")?,
+                    max_overlap_share: r.f64("self contact overlap share")?,
+                })
+            };
+            self.self_deepest = read()?;
+            self.self_last = read()?;
+        }
         Ok(())
     }
 
@@ -260,57 +348,94 @@ impl Driver {
     }
 }
 
-/// Stage 1: one step of the particles in the colliders' field (forces for an explicit step,
-/// a potential for an implicit one). Returns the bonds broken in it.
+/// Whether an intact bond of `family` joins particles `i` and `j` in both directions, by the
+/// per-bond `state` (none: a model without fracture keeps every bond).
+fn intact_both_ways(family: &Family, state: Option<&[u8]>, i: u32, j: u32) -> bool {
+    let one_way = |a: u32, b: u32| {
+        let range = family.range(a as usize);
+        match family.row(a as usize).binary_search(&b) {
+            Ok(k) => state.is_none_or(|s| s[range.start + k] != 0),
+            Err(_) => false,
+        }
+    };
+    one_way(i, j) && one_way(j, i)
+}
+
+/// Stage 1: one step of the particles in the colliders' field and each other's (forces for
+/// an explicit step, a potential for an implicit one). Returns the bonds broken in it.
 fn physics_with_contact<'a>(
     solver: &'a mut dyn Solver,
     colliders: Option<&mut Colliders>,
+    self_contact: Option<&SelfContact>,
     radii: &[f64],
-) -> Result<(Broken<'a>, ContactStats), PhysicsError> {
-    match colliders {
-        None => Ok((solver.step(&mut NoEnvironment)?, ContactStats::default())),
-        Some(colliders) => {
-            let mut env = ContactEnvironment {
-                colliders,
-                radii,
-                stats: ContactStats::default(),
-            };
-            let broken = solver.step(&mut env)?;
-            Ok((broken, env.stats))
-        }
+) -> Result<(Broken<'a>, ContactStats, SelfContactStats), PhysicsError> {
+    if colliders.is_none() && self_contact.is_none() {
+        let broken = solver.step(&mut NoEnvironment)?;
+        return Ok((broken, ContactStats::default(), SelfContactStats::default()));
     }
+    let mut env = ContactEnvironment {
+        colliders,
+        self_contact,
+        radii,
+        stats: ContactStats::default(),
+        self_stats: SelfContactStats::default(),
+    };
+    let broken = solver.step(&mut env)?;
+    Ok((broken, env.stats, env.self_stats))
 }
 
-/// The colliders as the physics crate's [`Environment`]: contact forces on the particles and
-/// the balls' own motion, with the statistics of the step.
+/// The colliders and contact between particles as the physics crate's [`Environment`]:
+/// contact forces on the particles and the balls' own motion, with the statistics of the step.
 struct ContactEnvironment<'a> {
-    colliders: &'a mut Colliders,
+    colliders: Option<&'a mut Colliders>,
+    self_contact: Option<&'a SelfContact>,
     radii: &'a [f64],
     stats: ContactStats,
+    self_stats: SelfContactStats,
 }
 
 impl Environment for ContactEnvironment<'_> {
     fn add_forces(&mut self, ext: External<'_>) {
-        self.stats = self.colliders.step(
-            ext.dt,
-            ext.positions,
-            ext.velocities,
-            ext.masses,
-            self.radii,
-            ext.forces,
-        );
+        if let Some(colliders) = self.colliders.as_deref_mut() {
+            self.stats = colliders.step(
+                ext.dt,
+                ext.positions,
+                ext.velocities,
+                ext.masses,
+                self.radii,
+                ext.forces,
+            );
+        }
+        if let Some(sc) = self.self_contact {
+            self.self_stats = sc.add_forces(
+                ext.dt,
+                ext.positions,
+                ext.velocities,
+                ext.masses,
+                ext.forces,
+            );
+        }
     }
 
     fn implicit(&mut self) -> Option<&mut dyn ImplicitEnvironment> {
+        // Self contact has no potential yet (setup refuses it with the implicit integrator).
+        if self.self_contact.is_some() || self.colliders.is_none() {
+            return None;
+        }
         Some(self)
     }
 
     fn save(&self, w: &mut Writer) {
-        self.colliders.save(w);
+        if let Some(c) = self.colliders.as_deref() {
+            c.save(w);
+        }
     }
 
     fn restore(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
-        self.colliders.restore(r)
+        match self.colliders.as_deref_mut() {
+            Some(c) => c.restore(r),
+            None => Ok(()),
+        }
     }
 }
 
@@ -324,21 +449,27 @@ impl ImplicitEnvironment for ContactEnvironment<'_> {
         v0: &[Vec3],
         masses: &[f64],
     ) -> Result<(), PhysicsError> {
-        self.colliders
-            .begin_implicit(dt, y0, v0, masses, self.radii)
+        let Some(c) = self.colliders.as_deref_mut() else {
+            return Ok(());
+        };
+        c.begin_implicit(dt, y0, v0, masses, self.radii)
             .map_err(|e| PhysicsError::BadSetting(format!("contact: {e}")))
     }
 
     fn bodies(&self) -> usize {
-        self.colliders.implicit_bodies()
+        self.colliders.as_deref().map_or(0, |c| c.implicit_bodies())
     }
 
     fn body_guess(&self, out: &mut [Vec3]) {
-        out.copy_from_slice(self.colliders.implicit_body_targets());
+        if let Some(c) = self.colliders.as_deref() {
+            out.copy_from_slice(c.implicit_body_targets());
+        }
     }
 
     fn body_curvature(&self, out: &mut [f64]) {
-        out.copy_from_slice(self.colliders.implicit_body_diagonal());
+        if let Some(c) = self.colliders.as_deref() {
+            out.copy_from_slice(c.implicit_body_diagonal());
+        }
     }
 
     fn potential(
@@ -347,16 +478,22 @@ impl ImplicitEnvironment for ContactEnvironment<'_> {
         c: &[Vec3],
         grad: Option<(&mut [Vec3], &mut [Vec3])>,
     ) -> f64 {
-        self.colliders.implicit_potential(q, c, grad)
+        self.colliders
+            .as_deref_mut()
+            .map_or(0.0, |col| col.implicit_potential(q, c, grad))
     }
 
     fn end(&mut self, q: &[Vec3], c: &[Vec3], v: &[Vec3]) {
-        self.stats = self.colliders.end_implicit(q, c, v);
+        if let Some(col) = self.colliders.as_deref_mut() {
+            self.stats = col.end_implicit(q, c, v);
+        }
     }
 
     fn particle_curvature(&mut self, y0: &[Vec3], out: &mut [f64]) {
-        let c = self.colliders.implicit_body_start();
-        self.colliders.implicit_stiffness_hint(y0, c, out);
+        if let Some(col) = self.colliders.as_deref_mut() {
+            let c = col.implicit_body_start();
+            col.implicit_stiffness_hint(y0, c, out);
+        }
     }
 }
 

@@ -36,8 +36,8 @@ pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use load::Scene;
 pub use output::{
-    check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SolverJson,
-    POVRAY_MESH_NAME, RUN_FORMAT,
+    check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SelfContactJson,
+    SolverJson, POVRAY_MESH_NAME, RUN_FORMAT,
 };
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
 pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo};

@@ -153,6 +153,21 @@ pub struct FrameJson {
     /// Runs with the event search: sub-steps so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub search: Option<SearchJson>,
+    /// Runs with self contact: pairs in contact in the frame's last step, and the deepest
+    /// overlap so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub self_contact: Option<SelfContactJson>,
+}
+
+/// Contact between particles up to a frame, in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct SelfContactJson {
+    /// Pairs in contact in the last step before the frame.
+    pub pairs: usize,
+    /// Deepest overlap so far (m): a pair's contact distance minus its distance.
+    pub deepest: f64,
+    /// The deepest overlap so far as a share of its pair's contact distance.
+    pub deepest_share: f64,
 }
 
 /// An event-search run's sub-steps up to a frame, in `run.json`.
@@ -378,6 +393,14 @@ impl FrameWriter {
                 SearchJson {
                     substeps: s.substeps,
                     rejected: s.rejected,
+                }
+            }),
+            self_contact: driver.self_contact().map(|_| {
+                let deepest = driver.self_contact_deepest();
+                SelfContactJson {
+                    pairs: driver.self_contact_last().pairs,
+                    deepest: deepest.max_overlap,
+                    deepest_share: deepest.max_overlap_share,
                 }
             }),
         };

@@ -78,6 +78,9 @@ pub struct Summary {
     pub solver: perifrac_physics::SolverStats,
     /// The integrator's name.
     pub integrator: &'static str,
+    /// Self contact, when the scene has it: pair-list builds, and the most pairs in contact
+    /// in a step with the deepest overlap (m, and as a share of the contact distance).
+    pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
 }
 
 /// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
@@ -229,6 +232,9 @@ fn drive(
         frames_written: writer.frames_written(),
         stage_times: driver.stage_times(),
         solver: driver.solver().stats(),
+        self_contact: driver
+            .self_contact()
+            .map(|c| (c.rebuilds(), driver.self_contact_deepest())),
         integrator: driver.solver().integrator_name(),
     })
 }

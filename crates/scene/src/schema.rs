@@ -183,6 +183,18 @@ pub struct SimulationSpec {
     pub force_growth: Option<f64>,
     /// Event search: a bond may break this share past its threshold (default 0.1).
     pub overshoot: Option<f64>,
+    /// Contact between particles that share no intact bond: fragments and the faces of cracks
+    /// push each other apart (default false; explicit steps only).
+    pub self_contact: Option<bool>,
+    /// Self contact: penalty stiffness of a particle as a multiple of `E r_p` (default 0.25).
+    pub self_contact_stiffness: Option<f64>,
+    /// Self contact: contact distance as a multiple of the sum of two contact radii
+    /// (default 1.3).
+    pub self_contact_distance: Option<f64>,
+    /// Self contact: normal damping as a fraction of critical (default 0.1).
+    pub self_contact_damping: Option<f64>,
+    /// Self contact: Coulomb friction coefficient (default 0.5).
+    pub self_contact_friction: Option<f64>,
 }
 
 /// A ground plane (half-space) through `point` with outward `normal`.

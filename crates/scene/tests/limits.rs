@@ -292,3 +292,44 @@ fn event_search_keys_are_checked() {
     let setup = Setup::with_limits(&scene(&with("event_search = true")), None, &limits()).unwrap();
     assert_eq!(setup.info.integrator, "event_search");
 }
+
+#[test]
+fn self_contact_keys_are_checked() {
+    let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
+    for (extra, key, says) in [
+        (
+            "self_contact_stiffness = 2.0",
+            "simulation.self_contact_stiffness",
+            "self_contact = true",
+        ),
+        (
+            "self_contact = false\nself_contact_friction = 0.1",
+            "simulation.self_contact_friction",
+            "self_contact = true",
+        ),
+        (
+            "self_contact = true\nself_contact_distance = 0.0",
+            "simulation.self_contact_distance",
+            "positive",
+        ),
+        (
+            "self_contact = true\nself_contact_damping = -0.1",
+            "simulation.self_contact_damping",
+            ">= 0",
+        ),
+        (
+            "self_contact = true\nself_contact_stiffness = inf",
+            "simulation.self_contact_stiffness",
+            "positive and finite",
+        ),
+    ] {
+        let e = refusal(&with(extra)).to_string();
+        assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
+    }
+    // Self contact adds the frequency of a particle touching twelve others to the stable step.
+    let plain = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    let touching =
+        Setup::with_limits(&scene(&with("self_contact = true")), None, &limits()).unwrap();
+    assert!(touching.driver.self_contact().is_some() && plain.driver.self_contact().is_none());
+    assert!(touching.info.dt_limit < plain.info.dt_limit);
+}

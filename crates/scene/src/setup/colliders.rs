@@ -21,6 +21,9 @@ pub(super) struct ContactStiffness {
     /// `n k / M` with `n = 4 ((R + r) / r)^2` (as many contact spheres of radius `r` as fit
     /// around it): a light ball rings faster than the particles it hits.
     pub ball_omega2: f64,
+    /// Largest `omega^2` (1/s^2) contact between particles adds
+    /// (`perifrac_contact::SelfContact::max_omega2`); 0 without it.
+    pub self_omega2: f64,
 }
 
 /// The colliders and their stiffness, or `None` when the scene has none. `young` (Pa) and

@@ -32,6 +32,14 @@ impl Materials {
         }
     }
 
+    /// Young's modulus (Pa) of material `k` (0 for an index past the list).
+    pub(super) fn young(&self, k: usize) -> f64 {
+        match self {
+            Materials::Chen(m) => m.get(k).map_or(0.0, |m| m.young()),
+            Materials::Xu(m) => m.get(k).map_or(0.0, super::xu_material::young_of),
+        }
+    }
+
     /// The model's name in the scene file.
     pub(super) fn name(&self) -> &'static str {
         match self {

@@ -9,6 +9,7 @@ mod material;
 mod math;
 mod mesh;
 mod radii;
+mod self_contact;
 mod solver;
 mod step;
 mod xu_material;
@@ -233,7 +234,11 @@ impl Setup {
         if let Some((col, _)) = &colliders {
             colliders::check_placement(&ctx, col, &mesh, &rest, &radii)?;
         }
-        let contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
+        let mut contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
+        let self_contact = self_contact::build(&ctx, sim, kind, &materials, &ids, &rest, &radii)?;
+        if let Some(sc) = &self_contact {
+            contact.self_omega2 = sc.max_omega2(model.as_dyn().masses());
+        }
 
         let velocities = loads::initial_velocities(&ctx, f, &rest)?;
         let travel = |fraction| {
@@ -349,7 +354,14 @@ impl Setup {
             precrack_faces,
             estimate,
         };
-        let driver = Driver::new(mesh, solver, colliders.map(|(c, _)| c), radii, releases);
+        let driver = Driver::new(
+            mesh,
+            solver,
+            colliders.map(|(c, _)| c),
+            self_contact,
+            radii,
+            releases,
+        );
         Ok(Setup {
             scene_path: scene.path.clone(),
             scene_text: scene.text.clone(),

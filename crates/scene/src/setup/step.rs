@@ -14,8 +14,8 @@ use super::defaults;
 
 /// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
 /// (power iteration on the linearised forces at `rest`, Silling-Askari when it fails), all
-/// contact springs on the lightest particle, and the fastest dynamic ball on the particles it
-/// touches (see [`ContactStiffness`]), with the lightest particle's mass from `model`.
+/// contact springs on the lightest particle, the fastest dynamic ball on the particles it
+/// touches and contact between particles (see [`ContactStiffness`]), with the lightest particle's mass from `model`.
 pub(super) fn stable_limit(
     model: &mut dyn ForceModel,
     rest: &[[f64; 3]],
@@ -24,7 +24,8 @@ pub(super) fn stable_limit(
 ) -> f64 {
     let m_min = model.masses().iter().cloned().fold(f64::INFINITY, f64::min);
     let (omega, _) = stable_frequency(model, rest, horizon);
-    2.0 / (omega * omega + contact.per_particle / m_min + contact.ball_omega2).sqrt()
+    2.0 / (omega * omega + contact.per_particle / m_min + contact.ball_omega2 + contact.self_omega2)
+        .sqrt()
 }
 
 /// The longest step (s) in which the fastest ball (by its initial velocity) or particle (by
