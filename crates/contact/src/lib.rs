@@ -14,7 +14,8 @@
 //! dissipative potentials).
 //!
 //! [`SelfContact`] pushes apart particles of the body that share no intact bond (fragments,
-//! the faces of a crack), from a Verlet list of nearby pairs, in explicit steps. This crate
+//! the faces of a crack), from a Verlet list of nearby pairs, as forces and as a penalty
+//! potential. This crate
 //! does not know the physics crate.
 
 mod colliders;

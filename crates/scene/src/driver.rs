@@ -128,7 +128,7 @@ impl Driver {
         let (broken, contact, self_stats) = physics_with_contact(
             solver.as_mut(),
             colliders.as_mut(),
-            self_contact.as_ref(),
+            self_contact.as_mut(),
             radii,
         )?;
         if let Some(sc) = self_contact.as_mut() {
@@ -366,7 +366,7 @@ fn intact_both_ways(family: &Family, state: Option<&[u8]>, i: u32, j: u32) -> bo
 fn physics_with_contact<'a>(
     solver: &'a mut dyn Solver,
     colliders: Option<&mut Colliders>,
-    self_contact: Option<&SelfContact>,
+    self_contact: Option<&mut SelfContact>,
     radii: &[f64],
 ) -> Result<(Broken<'a>, ContactStats, SelfContactStats), PhysicsError> {
     if colliders.is_none() && self_contact.is_none() {
@@ -388,7 +388,7 @@ fn physics_with_contact<'a>(
 /// contact forces on the particles and the balls' own motion, with the statistics of the step.
 struct ContactEnvironment<'a> {
     colliders: Option<&'a mut Colliders>,
-    self_contact: Option<&'a SelfContact>,
+    self_contact: Option<&'a mut SelfContact>,
     radii: &'a [f64],
     stats: ContactStats,
     self_stats: SelfContactStats,
@@ -406,7 +406,7 @@ impl Environment for ContactEnvironment<'_> {
                 ext.forces,
             );
         }
-        if let Some(sc) = self.self_contact {
+        if let Some(sc) = self.self_contact.as_deref() {
             self.self_stats = sc.add_forces(
                 ext.dt,
                 ext.positions,
@@ -418,10 +418,6 @@ impl Environment for ContactEnvironment<'_> {
     }
 
     fn implicit(&mut self) -> Option<&mut dyn ImplicitEnvironment> {
-        // Self contact has no potential yet (setup refuses it with the implicit integrator).
-        if self.self_contact.is_some() || self.colliders.is_none() {
-            return None;
-        }
         Some(self)
     }
 
@@ -478,21 +474,39 @@ impl ImplicitEnvironment for ContactEnvironment<'_> {
         c: &[Vec3],
         grad: Option<(&mut [Vec3], &mut [Vec3])>,
     ) -> f64 {
-        self.colliders
-            .as_deref_mut()
-            .map_or(0.0, |col| col.implicit_potential(q, c, grad))
+        let (mut gq, gc) = match grad {
+            Some((gq, gc)) => (Some(gq), Some(gc)),
+            None => (None, None),
+        };
+        let mut energy = 0.0;
+        if let Some(col) = self.colliders.as_deref_mut() {
+            energy += col.implicit_potential(q, c, gq.as_deref_mut().zip(gc));
+        }
+        if let Some(sc) = self.self_contact.as_deref_mut() {
+            energy += sc.potential(q, gq);
+        }
+        energy
     }
 
     fn end(&mut self, q: &[Vec3], c: &[Vec3], v: &[Vec3]) {
         if let Some(col) = self.colliders.as_deref_mut() {
             self.stats = col.end_implicit(q, c, v);
         }
+        if let Some(sc) = self.self_contact.as_deref() {
+            self.self_stats = sc.stats_at(q);
+        }
     }
 
     fn particle_curvature(&mut self, y0: &[Vec3], out: &mut [f64]) {
-        if let Some(col) = self.colliders.as_deref_mut() {
-            let c = col.implicit_body_start();
-            col.implicit_stiffness_hint(y0, c, out);
+        match self.colliders.as_deref_mut() {
+            Some(col) => {
+                let c = col.implicit_body_start();
+                col.implicit_stiffness_hint(y0, c, out);
+            }
+            None => out.fill(0.0),
+        }
+        if let Some(sc) = self.self_contact.as_deref() {
+            sc.curvature_hint(y0, out);
         }
     }
 }

@@ -531,6 +531,12 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
             });
         }
         let phi_start = phi;
+        let kinetic: f64 = model
+            .masses()
+            .iter()
+            .zip(&state.velocities)
+            .map(|(&m, v)| 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+            .sum();
         self.trace.clear();
         self.trace.push(phi);
         let (mut count, mut head) = (0usize, 0usize);
@@ -567,8 +573,12 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
                 step *= 0.5;
             }
             let Some(value) = accepted else {
-                // at the rounding floor of Phi the decrease cannot be seen: converged
-                if predicted <= 1e-12 * phi.abs().max(phi_start.abs()) {
+                // at the rounding floor of Phi the decrease cannot be seen: converged. The
+                // floor is relative to the energies Phi is made of, the kinetic one included:
+                // a body coasting without forces starts at Phi ~ 0 (its inertial target),
+                // where nothing is left to decrease but rounding
+                let floor = phi.abs().max(phi_start.abs()).max(kinetic);
+                if predicted <= 1e-12 * floor {
                     capped = false;
                     break;
                 }

@@ -235,7 +235,7 @@ impl Setup {
             colliders::check_placement(&ctx, col, &mesh, &rest, &radii)?;
         }
         let mut contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
-        let self_contact = self_contact::build(&ctx, sim, kind, &materials, &ids, &rest, &radii)?;
+        let self_contact = self_contact::build(&ctx, sim, &materials, &ids, &rest, &radii)?;
         if let Some(sc) = &self_contact {
             contact.self_omega2 = sc.max_omega2(model.as_dyn().masses());
         }

@@ -8,7 +8,6 @@ use crate::schema::SimulationSpec;
 
 use super::check::Ctx;
 use super::material::Materials;
-use super::solver::Kind;
 
 /// Default penalty stiffness factor on `E r_p`, a quarter of the colliders': a particle may
 /// touch twelve others at once, so the stable step makes room for twelve springs. On the
@@ -21,7 +20,6 @@ const STIFFNESS_FACTOR: f64 = 0.25;
 pub(super) fn build(
     ctx: &Ctx,
     sim: &SimulationSpec,
-    kind: Kind,
     materials: &Materials,
     ids: &[u16],
     rest: &[[f64; 3]],
@@ -41,12 +39,6 @@ pub(super) fn build(
             ));
         }
         return Ok(None);
-    }
-    if kind == Kind::Implicit {
-        return Err(ctx.err(
-            "simulation.self_contact",
-            "self contact steps explicitly for now: use integrator = \"explicit\"",
-        ));
     }
     let base = SelfContactParams::default();
     let factor = match sim.self_contact_stiffness {
