@@ -192,11 +192,6 @@ impl SelfContact {
         })
     }
 
-    /// The coefficients.
-    pub fn params(&self) -> &SelfContactParams {
-        &self.params
-    }
-
     /// How many times the pair list was built.
     pub fn rebuilds(&self) -> u64 {
         self.rebuilds

@@ -7,9 +7,7 @@ use std::time::{Duration, Instant};
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use perifrac_contact::{Colliders, ContactStats, SelfContact, SelfContactStats};
 use perifrac_physics::math::Vec3;
-use perifrac_physics::{
-    Environment, External, Family, ImplicitEnvironment, NoEnvironment, PhysicsError, Solver,
-};
+use perifrac_physics::{Environment, External, Family, ImplicitEnvironment, PhysicsError, Solver};
 use perifrac_topology::TetMesh;
 
 /// Wall time spent in each stage since the driver was made.
@@ -369,10 +367,6 @@ fn physics_with_contact<'a>(
     self_contact: Option<&mut SelfContact>,
     radii: &[f64],
 ) -> Result<(Broken<'a>, ContactStats, SelfContactStats), PhysicsError> {
-    if colliders.is_none() && self_contact.is_none() {
-        let broken = solver.step(&mut NoEnvironment)?;
-        return Ok((broken, ContactStats::default(), SelfContactStats::default()));
-    }
     let mut env = ContactEnvironment {
         colliders,
         self_contact,

@@ -48,7 +48,11 @@ impl Ctx<'_> {
         } else {
             Err(self.err(
                 key,
-                format!("{} {unit} must be positive and finite", show(v)),
+                format!(
+                    "{}{}{unit} must be positive and finite",
+                    show(v),
+                    if unit.is_empty() { "" } else { " " }
+                ),
             ))
         }
     }
