@@ -3,7 +3,8 @@
 //! [`accuracy`] runs peridynamic cases beside references (closed forms and the project's own
 //! finite elements, shown converged) over resolution and horizon sweeps and reports each run's
 //! wall time, steps, bonds and error; [`stability`] runs hard cases and says whether each
-//! survived, stopped with a message or failed; [`speed`] times the force loop. Results come as
+//! survived, stopped with a message or failed; [`speed`] times the force loop; [`contact`]
+//! measures contact between particles. Results come as
 //! [`Table`]s (Markdown) and [`Plot`]s (PNG through plotters). This crate is a harness: it uses
 //! the physics, fem, topology and scene crates and is used only by the command line.
 
@@ -11,6 +12,7 @@
 
 pub mod accuracy;
 mod bar;
+pub mod contact;
 mod error;
 pub mod events;
 mod fit;

@@ -123,6 +123,11 @@ fn no_stability_case_ends_in_a_nan_or_a_panic() {
             other => panic!("{f}: {other:?}"),
         }
     }
+    // Contact between particles carries both crushes through to the end (without it the
+    // elastic crush was stopped by the guard once particles squeezed past each other).
+    for c in ["crush a steel", "crush a brittle"] {
+        assert_eq!(by_name(c).outcome, Outcome::Survived, "{c}");
+    }
     // A rigid spin keeps its energy to rounding (measured 7e-10 over 300 steps).
     assert!(by_name("spinning").energy_drift.abs() < 1e-6);
 }
@@ -200,4 +205,25 @@ fn the_event_search_report_holds_every_run_and_the_search_does_extra_work() {
         4,
         "every run but the reference against it"
     );
+}
+
+#[test]
+fn contact_tables_measure_without_changing_the_run() {
+    let t = perifrac_bench::contact::wall(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(t.rows.len(), 5);
+    let (off, measured) = (&t.rows[0], &t.rows[1]);
+    // Contact of stiffness 0 only measures: the same step, steps, bonds broken and fragments
+    // as no contact at all.
+    for col in [1, 2, 11, 12] {
+        assert_eq!(off[col], measured[col], "column {col}");
+    }
+    // A stiffer contact shortens the step.
+    let dt = |r: &Vec<String>| r[1].parse::<f64>().unwrap();
+    assert!(dt(&t.rows[4]) < dt(&t.rows[3]) && dt(&t.rows[3]) <= dt(&t.rows[2]));
+    let pile = perifrac_bench::contact::pile(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(pile.rows.len(), 2);
+    // Eight pieces, nothing moving: one build, no pair touching.
+    assert_eq!(pile.rows[1][3], "8");
+    assert_eq!(pile.rows[1][7], "1");
+    assert_eq!(pile.rows[1][9], "0");
 }

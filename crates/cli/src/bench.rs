@@ -1,4 +1,4 @@
-//! `perifrac bench accuracy | stability | speed`: run the benchmark harness and write its
+//! `perifrac bench accuracy | stability | events | contact | speed`: run the benchmark harness and write its
 //! Markdown report and PNG plots into a directory.
 
 use std::io::Write as _;
@@ -34,6 +34,9 @@ pub enum Which {
     /// The explicit step's event search on the default scene's impact: bonds broken,
     /// fragments and crack pattern against a fine-step reference, at equal cost.
     Events(Common),
+    /// Contact between particles on the default wall (overlaps with it off and on, its cost,
+    /// pair-list builds) and on a block of pieces at rest.
+    Contact(Common),
     /// Bond-update rates per material path, seconds per step at the paper's wall size, the
     /// topology's share of a step during heavy fracture, memory per bond, the implicit step.
     Speed(Common),
@@ -57,6 +60,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Which::Stability(c) => stability_report(c),
         Which::Speed(c) => speed_report(c),
         Which::Events(c) => events_report(c),
+        Which::Contact(c) => contact_report(c),
     }
 }
 
@@ -153,6 +157,30 @@ fn events_report(c: &Common) -> Result<()> {
         Err(e) => eprintln!("note: {e}; the table is written without its plot"),
     }
     report.write("events", &md)?;
+    Ok(())
+}
+
+fn contact_report(c: &Common) -> Result<()> {
+    let report = Report::start(c)?;
+    let mut progress = report.progress();
+    let e = effort(c);
+    let wall = perifrac_bench::contact::wall(e, &mut progress)?;
+    let pile = perifrac_bench::contact::pile(e, &mut progress)?;
+    let mut md = report.header("contact");
+    md.push_str(
+        "## The default wall shot through
+
+",
+    );
+    md.push_str(&wall.to_markdown());
+    md.push_str(
+        "
+## A block cut into pieces, at rest
+
+",
+    );
+    md.push_str(&pile.to_markdown());
+    report.write("contact", &md)?;
     Ok(())
 }
 

@@ -231,8 +231,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
     }
     eprintln!(
-        "time per stage: physics {:.0}%, topology {:.0}%, advection {:.0}%, output {:.0}%",
+        "time per stage: physics {:.0}% (contact {:.0}%), topology {:.0}%, advection {:.0}%, \
+         output {:.0}%",
         share(t.physics),
+        share(t.contact),
         share(t.topology),
         share(t.advect),
         share(t.output)

@@ -3,7 +3,7 @@
 use crate::desc::{BallDesc, BallMotion, GroundDesc};
 use crate::error::ContactError;
 use crate::implicit::ImplicitState;
-use crate::kernel::Coeffs;
+use crate::kernel::{scale_of, Coeffs};
 use crate::math::{dot, from_parry, norm, scale, sub, to_parry};
 use crate::params::ContactParams;
 use crate::step::Scratch;
@@ -96,6 +96,8 @@ pub struct Colliders {
     /// Mass (kg) the ball-ground stiffness is scaled against; see
     /// [`Colliders::ball_ground_stiffness`].
     pub(crate) reference_mass: Option<f64>,
+    /// Per particle, the factor on every collider's stiffness (dimensionless); empty: 1.
+    pub(crate) stiffness_scale: Vec<f64>,
     pub(crate) scratch: Scratch,
     /// The lagged state and buffers of the implicit step (`implicit.rs`).
     pub(crate) implicit: ImplicitState,
@@ -221,6 +223,7 @@ impl Colliders {
             balls: bs,
             gravity,
             reference_mass: None,
+            stiffness_scale: Vec::new(),
             scratch,
             implicit: ImplicitState::default(),
         })
@@ -357,17 +360,18 @@ impl Colliders {
     /// A diagnostic for energy checks; sequential, not for the hot loop.
     pub fn contact_energy(&self, y: &[Vec3], radius: &[f64]) -> f64 {
         let mut e = 0.0;
-        for (p, &r) in y.iter().zip(radius) {
+        for (i, (p, &r)) in y.iter().zip(radius).enumerate() {
+            let s = scale_of(&self.stiffness_scale, i);
             for g in &self.grounds {
                 let d = r - dot(sub(*p, g.point()), g.normal);
                 if d > 0.0 {
-                    e += 0.5 * g.coeffs.k * d * d;
+                    e += 0.5 * s * g.coeffs.k * d * d;
                 }
             }
             for b in &self.balls {
                 let d = r + b.shape.radius - norm(sub(*p, b.center()));
                 if d > 0.0 {
-                    e += 0.5 * b.coeffs.k * d * d;
+                    e += 0.5 * s * b.coeffs.k * d * d;
                 }
             }
         }
@@ -386,9 +390,38 @@ impl Colliders {
         e
     }
 
+    /// Gives particle `i` the penalty stiffness `scale[i]` times each collider's (its damping
+    /// ratio and friction unchanged): the collider stiffness is then per particle, from each
+    /// particle's own material and size (`k_i = factor E_i r_i` for colliders made with
+    /// [`ContactParams::from_material`] at a reference `E r` when `scale[i] = E_i r_i / (E r)`).
+    /// An empty `scale` gives every particle the colliders' stiffness. Errors when a factor is
+    /// not finite and >= 0; the length must match the particles of every later step.
+    pub fn set_stiffness_scale(&mut self, scale: Vec<f64>) -> Result<(), ContactError> {
+        if let Some((particle, &value)) = scale
+            .iter()
+            .enumerate()
+            .find(|(_, s)| !s.is_finite() || **s < 0.0)
+        {
+            return Err(ContactError::BadParticle {
+                particle,
+                what: "collider stiffness scale",
+                expected: "finite and >= 0",
+                value,
+            });
+        }
+        self.stiffness_scale = scale;
+        Ok(())
+    }
+
+    /// The per-particle stiffness factors of [`Colliders::set_stiffness_scale`] (empty: all 1).
+    pub fn stiffness_scale(&self) -> &[f64] {
+        &self.stiffness_scale
+    }
+
     /// Mass (kg) the ball-ground stiffness is scaled against (see
-    /// [`Colliders::ball_ground_stiffness`]). Set automatically to the smallest particle mass on
-    /// the first [`Colliders::step`] with particles, unless set here first.
+    /// [`Colliders::ball_ground_stiffness`]). Set automatically on the first [`Colliders::step`]
+    /// with particles, unless set here first, to the smallest particle mass over its stiffness
+    /// scale: the particle that rings fastest on a ground.
     pub fn set_reference_mass(&mut self, mass: f64) {
         assert!(
             mass.is_finite() && mass > 0.0,
@@ -406,8 +439,9 @@ impl Colliders {
     /// kinematic ball (it does not feel the ground).
     ///
     /// The ground's `stiffness` is per particle. The ball gets the same contact *frequency* as
-    /// the lightest particle on that ground: `k_bg = k_g M / m_ref`, with `M` the ball mass and
-    /// `m_ref` the reference mass (the smallest particle mass). So the ball-ground spring is
+    /// the fastest-ringing particle on that ground: `k_bg = k_g M / m_ref`, with `M` the ball
+    /// mass and `m_ref` the reference mass (the smallest particle mass over its stiffness
+    /// scale). So the ball-ground spring is
     /// stable at any step that is stable for particles on the ground (`omega dt < 2` with
     /// `omega = sqrt(k_g / m_ref)`), and the resting sag `M g / k_bg = m_ref g / k_g` is the
     /// sag of one particle resting on the ground: small. Damping uses the ground's ratio

@@ -15,7 +15,7 @@
 use crate::colliders::{ball_ground_coeffs, BallBody, Colliders, Ground};
 use crate::error::ContactError;
 use crate::incremental::{dissipation, elastic, Lagged};
-use crate::kernel::{ball_normal, Coeffs};
+use crate::kernel::{ball_normal, scale_of, Coeffs};
 use crate::math::{add, add_assign, dot, is_finite, scale, sub, to_parry};
 use crate::step::{ContactStats, CHUNK};
 use crate::Vec3;
@@ -206,8 +206,13 @@ impl Colliders {
             mass.len(),
             radius.len()
         );
+        assert!(
+            self.stiffness_scale.is_empty() || self.stiffness_scale.len() == n,
+            "{} stiffness scales for {n} particles",
+            self.stiffness_scale.len()
+        );
         if self.reference_mass.is_none() && n > 0 {
-            let m_min = mass.iter().copied().fold(f64::INFINITY, f64::min);
+            let m_min = crate::step::reference_mass(mass, &self.stiffness_scale);
             if m_min.is_finite() && m_min > 0.0 {
                 self.reference_mass = Some(m_min);
             }
@@ -217,6 +222,7 @@ impl Colliders {
             balls,
             gravity,
             reference_mass,
+            stiffness_scale,
             implicit: st,
             ..
         } = self;
@@ -241,6 +247,7 @@ impl Colliders {
             v0,
             mass,
             radius,
+            scale: stiffness_scale,
         };
         pairs[..chunks]
             .par_iter_mut()
@@ -374,6 +381,7 @@ impl Colliders {
         let st = &self.implicit;
         let chunks = st.chunks();
         let (grounds, balls) = (&self.grounds, &self.balls);
+        let scale = &self.stiffness_scale;
         let centre = |j: usize| match st.ball_body[j] {
             Some(b) => c[b],
             None => st.centre[j],
@@ -398,7 +406,7 @@ impl Colliders {
                             s += b.coeffs.k;
                         }
                     }
-                    *ok = s;
+                    *ok = s * scale_of(scale, start + k);
                 }
                 for pp in pairs {
                     let l = &pp.lag;
@@ -475,6 +483,7 @@ impl Colliders {
         let Self {
             grounds,
             balls,
+            stiffness_scale,
             implicit: st,
             ..
         } = self;
@@ -488,6 +497,7 @@ impl Colliders {
             balls,
             q,
             radius: &st.radius,
+            scale: stiffness_scale,
             centre: &st.centre,
             start: &st.start,
         };
@@ -608,6 +618,8 @@ struct BeginCtx<'a> {
     v0: &'a [Vec3],
     mass: &'a [f64],
     radius: &'a [f64],
+    /// Per-particle stiffness scale (empty: 1).
+    scale: &'a [f64],
 }
 
 impl BeginCtx<'_> {
@@ -624,10 +636,11 @@ impl BeginCtx<'_> {
             if let Some(bad) = check_particle(i, y, self.v0[i], m, r) {
                 return Some(bad);
             }
+            let s = scale_of(self.scale, i);
             for g in self.grounds {
                 let d0 = r - (dot(y, g.normal) - g.offset);
                 if d0 > 0.0 {
-                    let lag = lag(g.normal, d0, m, dt, &g.coeffs, self.st.eps(r, d0));
+                    let lag = lag(g.normal, d0, m, dt, &g.coeffs.scaled(s), self.st.eps(r, d0));
                     list.push(ParticlePair {
                         particle: i,
                         ball: None,
@@ -643,12 +656,13 @@ impl BeginCtx<'_> {
                 if d2 < reach * reach {
                     let (n0, dist) = ball_normal(dx, d2);
                     let d0 = reach - dist;
-                    pk[j] += b.coeffs.k;
+                    let co = b.coeffs.scaled(s);
+                    pk[j] += co.k;
                     list.push(ParticlePair {
                         particle: i,
                         ball: Some(j),
                         y0: y,
-                        lag: lag(n0, d0, m, dt, &b.coeffs, self.st.eps(r, d0)),
+                        lag: lag(n0, d0, m, dt, &co, self.st.eps(r, d0)),
                     });
                 }
             }
@@ -697,6 +711,8 @@ struct EvalCtx<'a> {
     balls: &'a [BallBody],
     q: &'a [Vec3],
     radius: &'a [f64],
+    /// Per-particle stiffness scale (empty: 1).
+    scale: &'a [f64],
     /// Per ball: end centre at this trial.
     centre: &'a [Vec3],
     /// Per ball: start centre.
@@ -721,10 +737,11 @@ impl EvalCtx<'_> {
         let mut e = 0.0;
         for i in start..end {
             let (p, r) = (self.q[i], self.radius[i]);
+            let s = scale_of(self.scale, i);
             for gr in self.grounds {
                 let d = r - (dot(p, gr.normal) - gr.offset);
                 if d > 0.0 {
-                    let (ed, f) = elastic(gr.coeffs.k, d);
+                    let (ed, f) = elastic(s * gr.coeffs.k, d);
                     e += ed;
                     if let Some(g) = g.as_deref_mut() {
                         add_assign(&mut g[i - start], scale(gr.normal, -f));
@@ -740,7 +757,7 @@ impl EvalCtx<'_> {
                 if d2 < reach * reach {
                     let (nrm, dist) = ball_normal(dx, d2);
                     let d = reach - dist;
-                    let (ed, f) = elastic(b.coeffs.k, d);
+                    let (ed, f) = elastic(s * b.coeffs.k, d);
                     e += ed;
                     let gp = scale(nrm, -f);
                     if let Some(g) = g.as_deref_mut() {

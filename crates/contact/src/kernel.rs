@@ -27,6 +27,26 @@ impl Coeffs {
             mu: p.friction,
         }
     }
+
+    /// The coefficients for a particle whose stiffness is `s` times the collider's (see
+    /// [`crate::Colliders::set_stiffness_scale`]): the same damping ratio and friction.
+    #[inline]
+    pub(crate) fn scaled(&self, s: f64) -> Self {
+        if s == 1.0 {
+            return *self;
+        }
+        Self {
+            k: self.k * s,
+            damp: self.damp * s.sqrt(),
+            mu: self.mu,
+        }
+    }
+}
+
+/// The stiffness scale of particle `i`: 1 when no scale is set.
+#[inline]
+pub(crate) fn scale_of(scale: &[f64], i: usize) -> f64 {
+    scale.get(i).copied().unwrap_or(1.0)
 }
 
 /// Force (N) on a body of mass `m` (kg) that penetrates a surface by `d` > 0 (m) along the unit

@@ -34,7 +34,7 @@ mod surface;
 pub use colliders::{BallState, Colliders, GroundState};
 pub use desc::{BallDesc, BallMotion, GroundDesc};
 pub use error::ContactError;
-pub use pairs::{SelfContact, SelfContactParams, SelfContactStats, MAX_TOUCHING};
+pub use pairs::{Bonds, SelfContact, SelfContactParams, SelfContactStats, MAX_TOUCHING};
 pub use params::ContactParams;
 pub use step::ContactStats;
 

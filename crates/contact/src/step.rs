@@ -1,7 +1,7 @@
 //! One explicit contact step: ball kicks and drift, the parallel particle loop, reactions.
 
 use crate::colliders::{ball_ground_coeffs, BallBody, Colliders, Ground};
-use crate::kernel::{ball_normal, penalty_force};
+use crate::kernel::{ball_normal, penalty_force, scale_of};
 use crate::math::{add, add_assign, dot, from_parry, scale, sub, to_parry};
 use crate::Vec3;
 use rayon::prelude::*;
@@ -103,8 +103,13 @@ impl Colliders {
         if self.is_empty() {
             return ContactStats::default();
         }
+        assert!(
+            self.stiffness_scale.is_empty() || self.stiffness_scale.len() == n,
+            "{} stiffness scales for {n} particles",
+            self.stiffness_scale.len()
+        );
         if self.reference_mass.is_none() && n > 0 {
-            let m_min = mass.iter().copied().fold(f64::INFINITY, f64::min);
+            let m_min = reference_mass(mass, &self.stiffness_scale);
             if m_min.is_finite() && m_min > 0.0 {
                 self.reference_mass = Some(m_min);
             }
@@ -159,8 +164,10 @@ impl Colliders {
             grounds,
             balls,
             scratch,
+            stiffness_scale,
             ..
         } = self;
+        let stiffness_scale: &[f64] = stiffness_scale;
         scratch.prepare(chunks);
         let stride = scratch.stride;
         let grounds: &[Ground] = grounds;
@@ -176,8 +183,9 @@ impl Colliders {
                 let start = c * CHUNK;
                 for (k, fi) in f.iter_mut().enumerate() {
                     let i = start + k;
+                    let s = scale_of(stiffness_scale, i);
                     particle_vs_colliders(
-                        y[i], v[i], mass[i], radius[i], inv_dt, grounds, balls_ro, fi, part, st,
+                        y[i], v[i], mass[i], radius[i], s, inv_dt, grounds, balls_ro, fi, part, st,
                     );
                 }
             });
@@ -196,8 +204,8 @@ impl Colliders {
     }
 }
 
-/// All contacts of one particle at `p` (m) moving at `vp` (m/s), mass `m` (kg), radius `r` (m):
-/// adds its forces into `fi` and the opposite ball forces into `part`.
+/// All contacts of one particle at `p` (m) moving at `vp` (m/s), mass `m` (kg), radius `r` (m)
+/// and stiffness scale `s`: adds its forces into `fi` and the opposite ball forces into `part`.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn particle_vs_colliders(
@@ -205,6 +213,7 @@ fn particle_vs_colliders(
     vp: Vec3,
     m: f64,
     r: f64,
+    s: f64,
     inv_dt: f64,
     grounds: &[Ground],
     balls: &[BallBody],
@@ -215,7 +224,10 @@ fn particle_vs_colliders(
     for g in grounds {
         let d = r - (dot(p, g.normal) - g.offset);
         if d > 0.0 {
-            add_assign(fi, penalty_force(d, g.normal, vp, m, inv_dt, &g.coeffs));
+            add_assign(
+                fi,
+                penalty_force(d, g.normal, vp, m, inv_dt, &g.coeffs.scaled(s)),
+            );
             st.contacts += 1;
             st.max_penetration = st.max_penetration.max(d);
         }
@@ -227,7 +239,7 @@ fn particle_vs_colliders(
         if d2 < reach * reach {
             let (nrm, dist) = ball_normal(dx, d2);
             let d = reach - dist;
-            let f = penalty_force(d, nrm, sub(vp, b.velocity), m, inv_dt, &b.coeffs);
+            let f = penalty_force(d, nrm, sub(vp, b.velocity), m, inv_dt, &b.coeffs.scaled(s));
             add_assign(fi, f);
             add_assign(&mut part[j], scale(f, -1.0));
             st.contacts += 1;
@@ -262,4 +274,20 @@ fn ball_ground_force(
         1.0 / dt,
         c,
     ))
+}
+
+/// The smallest `mass[i] / scale[i]` (kg; the masses alone when `scale` is empty): the
+/// particle whose collider spring rings fastest. Particles of zero scale feel no collider.
+pub(crate) fn reference_mass(mass: &[f64], scale: &[f64]) -> f64 {
+    mass.iter()
+        .enumerate()
+        .map(|(i, &m)| {
+            let s = scale_of(scale, i);
+            if s > 0.0 {
+                m / s
+            } else {
+                f64::INFINITY
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
 }

@@ -203,6 +203,15 @@ fn fd_case(seed: u64, centre: bool) -> FdCase {
         q.push(add(ends[0], [1e-4, 0.0, -2e-5]));
     }
     let n = y0.len();
+    // Per-particle collider stiffness (a mix of materials and sizes): 0.5 to 2 times; 1 for
+    // the particle at the centre, whose test states its force.
+    let scale = (0..n)
+        .map(|i| match centre && i + 1 == n {
+            true => 1.0,
+            false => 0.5 + 1.5 * ((i * 7) % 5) as f64 / 4.0,
+        })
+        .collect();
+    col.set_stiffness_scale(scale).unwrap();
     col.begin_implicit(STEP, &y0, &vec![[0.0; 3]; n], &vec![M; n], &vec![R; n])
         .unwrap();
     FdCase { col, q, c }

@@ -1,7 +1,11 @@
-//! `step` and the implicit-step methods allocate nothing once their buffers fit the particles
-//! and pairs. One test: the counting allocator sees every thread of the binary.
+//! `step`, the implicit-step methods and contact between particles (its force pass, its
+//! energy, and a rebuild of its pair list) allocate nothing once their buffers fit the
+//! particles and pairs. One test: the counting allocator sees every thread of the binary.
 
-use perifrac_contact::{BallDesc, BallMotion, Colliders, ContactParams, GroundDesc, Vec3};
+use perifrac_contact::{
+    BallDesc, BallMotion, Colliders, ContactParams, GroundDesc, SelfContact, SelfContactParams,
+    Vec3,
+};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -25,6 +29,55 @@ static A: Counting = Counting;
 fn steps_after_the_first_do_not_allocate() {
     explicit_steps();
     implicit_steps();
+    self_contact_steps();
+}
+
+fn self_contact_steps() {
+    // A 20 x 20 x 20 lattice of spacing 1 cm, every other particle bonded to its neighbours,
+    // squeezed so neighbours overlap.
+    let side = 20;
+    let h = 0.01;
+    let rest: Vec<Vec3> = (0..side * side * side)
+        .map(|i| {
+            let (x, y, z) = (i % side, (i / side) % side, i / (side * side));
+            [x as f64 * h, y as f64 * h, z as f64 * h]
+        })
+        .collect();
+    let n = rest.len();
+    let mut sc = SelfContact::new(
+        rest.clone(),
+        vec![0.5 * h; n],
+        vec![1e4; n],
+        SelfContactParams::default(),
+    )
+    .unwrap();
+    let x: Vec<Vec3> = rest.iter().map(|p| p.map(|c| 0.8 * c)).collect();
+    let v = vec![[0.01, 0.0, -0.02]; n];
+    let m = vec![1e-3; n];
+    let mut f = vec![[0.0; 3]; n];
+    let mut grad = vec![[0.0; 3]; n];
+    let bonded = |i: u32, j: u32| (i + j).is_multiple_of(2);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let allocs = pool.install(|| {
+        // Warm-up: the first build sizes the buffers.
+        sc.prepare(&x, &v, 1e-5, &bonded);
+        let before = ALLOCS.load(Ordering::Relaxed);
+        let mut pairs = 0;
+        for _ in 0..3 {
+            sc.invalidate();
+            assert!(sc.prepare(&x, &v, 1e-5, &bonded));
+            pairs += sc.add_forces(1e-5, &x, &v, &m, &mut f).pairs;
+            assert!(sc.potential(&x, Some(&mut grad)) > 0.0);
+            sc.unbond(&[(0, 2), (1, 3)]);
+        }
+        assert!(pairs > 0);
+        ALLOCS.load(Ordering::Relaxed) - before
+    });
+    assert_eq!(sc.rebuilds(), 4);
+    assert_eq!(allocs, 0);
 }
 
 fn explicit_steps() {

@@ -53,3 +53,37 @@ proptest! {
         prop_assert!(ft_len <= 1e-3 * vt_len / dt * (1.0 + 1e-9) + scale, "{} {}", ft_len, vt_len);
     }
 }
+
+/// A particle's stiffness scale multiplies its penalty spring and nothing else: at rest on a
+/// ground (no damping or friction force), twice the scale gives twice the force, and the
+/// ball-ground reference mass follows the particle that rings fastest.
+#[test]
+fn stiffness_scale_is_per_particle() {
+    use perifrac_contact::GroundDesc;
+    let params = ContactParams::from_material(1e7, 0.01, 1.0, 0.3, 0.5);
+    let ground = GroundDesc {
+        point: [0.0; 3],
+        normal: [0.0, 0.0, 1.0],
+        params,
+    };
+    let mut col = Colliders::new(vec![ground], vec![], [0.0; 3]).unwrap();
+    assert!(col.set_stiffness_scale(vec![1.0, f64::NAN]).is_err());
+    col.set_stiffness_scale(vec![1.0, 2.0, 0.0]).unwrap();
+    // Each 1 mm into the ground.
+    let y = [[0.0, 0.0, 0.009], [0.1, 0.0, 0.009], [0.2, 0.0, 0.009]];
+    let mut f = vec![[0.0; 3]; 3];
+    col.step(
+        1e-6,
+        &y,
+        &[[0.0; 3]; 3],
+        &[1e-3, 1e-3, 1e-3],
+        &[0.01; 3],
+        &mut f,
+    );
+    let k = params.stiffness;
+    assert!((f[0][2] - k * 1e-3).abs() <= 1e-12 * k, "{f:?}");
+    assert_eq!(f[1][2], 2.0 * f[0][2]);
+    assert_eq!(f[2], [0.0; 3]);
+    // m / s: 1e-3 / 1, 1e-3 / 2, and nothing for the particle of zero scale.
+    assert_eq!(col.reference_mass(), Some(5e-4));
+}

@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
-use perifrac_contact::{Colliders, ContactStats, SelfContact, SelfContactStats};
+use perifrac_contact::{Bonds, Colliders, ContactStats, SelfContact, SelfContactStats};
 use perifrac_physics::math::Vec3;
 use perifrac_physics::{Environment, External, Family, ImplicitEnvironment, PhysicsError, Solver};
 use perifrac_topology::TetMesh;
@@ -15,6 +15,9 @@ use perifrac_topology::TetMesh;
 pub struct StageTimes {
     /// Peridynamic forces, integration, fracture check and contact forces.
     pub physics: Duration,
+    /// The part of `physics` spent on contact: collider forces, and between particles the
+    /// pair list (its builds and the check whether one is due) and the forces.
+    pub contact: Duration,
     /// Crack faces from broken bonds and vertex splitting.
     pub topology: Duration,
     /// Mass-weighted vertex advection.
@@ -111,26 +114,31 @@ impl Driver {
             ..
         } = self;
         let t0 = Instant::now();
+        let mut contact_time = Duration::ZERO;
         if let Some(sc) = self_contact.as_mut() {
             let model = solver.model();
             let family = model.discretization().family();
             let state = model.damage().map(|d| d.bond_state());
-            let bonded = |i: u32, j: u32| intact_both_ways(family, state, i, j);
+            let bonded = FamilyBonds { family, state };
             sc.prepare(
                 solver.positions(),
                 solver.velocities(),
                 solver.dt(),
                 &bonded,
             );
+            contact_time += t0.elapsed();
         }
         let (broken, contact, self_stats) = physics_with_contact(
             solver.as_mut(),
             colliders.as_mut(),
             self_contact.as_mut(),
             radii,
+            &mut contact_time,
         )?;
         if let Some(sc) = self_contact.as_mut() {
+            let t = Instant::now();
             sc.unbond(broken);
+            contact_time += t.elapsed();
         }
         let t1 = Instant::now();
         let broken_bonds = broken.len();
@@ -139,6 +147,7 @@ impl Driver {
         mesh.advect(solver.dt(), solver.model().masses(), solver.velocities());
         let t3 = Instant::now();
         times.physics += t1 - t0;
+        times.contact += contact_time;
         times.topology += t2 - t1;
         times.advect += t3 - t2;
         let report = StepReport {
@@ -247,7 +256,7 @@ impl Driver {
         w.u64(self.broken_bonds);
         w.u64(self.crack_faces);
         let t = &self.times;
-        for d in [t.physics, t.topology, t.advect, t.output] {
+        for d in [t.physics, t.contact, t.topology, t.advect, t.output] {
             w.f64(d.as_secs_f64());
         }
         self.mesh.save(w);
@@ -280,7 +289,7 @@ impl Driver {
         self.next_release = next;
         self.broken_bonds = r.u64("broken bonds")?;
         self.crack_faces = r.u64("crack faces")?;
-        let mut secs = [0.0; 4];
+        let mut secs = [0.0; 5];
         for s in &mut secs {
             // wall times only feed the summary: a bad one becomes zero rather than an error
             *s = r.f64("stage times")?;
@@ -288,9 +297,10 @@ impl Driver {
         let d = |s: f64| Duration::try_from_secs_f64(s).unwrap_or_default();
         self.times = StageTimes {
             physics: d(secs[0]),
-            topology: d(secs[1]),
-            advect: d(secs[2]),
-            output: d(secs[3]),
+            contact: d(secs[1]),
+            topology: d(secs[2]),
+            advect: d(secs[3]),
+            output: d(secs[4]),
         };
         self.mesh.restore(r)?;
         self.solver.restore(r)?;
@@ -346,17 +356,31 @@ impl Driver {
     }
 }
 
-/// Whether an intact bond of `family` joins particles `i` and `j` in both directions, by the
-/// per-bond `state` (none: a model without fracture keeps every bond).
-fn intact_both_ways(family: &Family, state: Option<&[u8]>, i: u32, j: u32) -> bool {
-    let one_way = |a: u32, b: u32| {
-        let range = family.range(a as usize);
-        match family.row(a as usize).binary_search(&b) {
-            Ok(k) => state.is_none_or(|s| s[range.start + k] != 0),
-            Err(_) => false,
+/// The solver's bonds as the pair list asks for them: a pair is bonded when its bond is intact,
+/// by the per-bond `state` (none: a model without fracture keeps every bond). Damage breaks
+/// both directions of a bond together (`perifrac_physics::Damage`), so the direction from `i`
+/// tells: no look into the other end's row.
+struct FamilyBonds<'a> {
+    family: &'a Family,
+    state: Option<&'a [u8]>,
+}
+
+impl Bonds for FamilyBonds<'_> {
+    fn flags(&self, i: u32, candidates: &[u32], out: &mut [u8]) {
+        let start = self.family.range(i as usize).start;
+        let row = self.family.row(i as usize);
+        // The row and the candidates both increase: one walk along the row finds each
+        // candidate's bond.
+        let mut p = 0;
+        for (o, &j) in out.iter_mut().zip(candidates) {
+            while p < row.len() && row[p] < j {
+                p += 1;
+            }
+            let bonded =
+                p < row.len() && row[p] == j && self.state.is_none_or(|s| s[start + p] != 0);
+            *o = u8::from(bonded);
         }
-    };
-    one_way(i, j) && one_way(j, i)
+    }
 }
 
 /// Stage 1: one step of the particles in the colliders' field and each other's (forces for
@@ -366,6 +390,7 @@ fn physics_with_contact<'a>(
     colliders: Option<&mut Colliders>,
     self_contact: Option<&mut SelfContact>,
     radii: &[f64],
+    time: &mut Duration,
 ) -> Result<(Broken<'a>, ContactStats, SelfContactStats), PhysicsError> {
     let mut env = ContactEnvironment {
         colliders,
@@ -373,9 +398,11 @@ fn physics_with_contact<'a>(
         radii,
         stats: ContactStats::default(),
         self_stats: SelfContactStats::default(),
+        time: Duration::ZERO,
     };
-    let broken = solver.step(&mut env)?;
-    Ok((broken, env.stats, env.self_stats))
+    let broken = solver.step(&mut env);
+    *time += env.time;
+    Ok((broken?, env.stats, env.self_stats))
 }
 
 /// The colliders and contact between particles as the physics crate's [`Environment`]:
@@ -386,10 +413,14 @@ struct ContactEnvironment<'a> {
     radii: &'a [f64],
     stats: ContactStats,
     self_stats: SelfContactStats,
+    /// Time spent in the explicit contact forces (the implicit step's contact terms are not
+    /// timed apart: they are evaluated inside its line search).
+    time: Duration,
 }
 
 impl Environment for ContactEnvironment<'_> {
     fn add_forces(&mut self, ext: External<'_>) {
+        let t0 = Instant::now();
         if let Some(colliders) = self.colliders.as_deref_mut() {
             self.stats = colliders.step(
                 ext.dt,
@@ -409,6 +440,7 @@ impl Environment for ContactEnvironment<'_> {
                 ext.forces,
             );
         }
+        self.time += t0.elapsed();
     }
 
     fn implicit(&mut self) -> Option<&mut dyn ImplicitEnvironment> {
@@ -516,4 +548,62 @@ fn cut(mesh: &mut TetMesh, broken: &[(u32, u32)]) -> usize {
         mesh.split();
     }
     added
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Scene, Setup};
+
+    /// The walk along the row gives what asking both directions pair by pair gives, with
+    /// broken bonds and without.
+    #[test]
+    fn family_bonds_match_the_pairwise_answer() {
+        let text = "[mesh]\nprimitive = \"box\"\nsize = [0.04, 0.04, 0.04]\ncells = [4, 4, 4]\n\n\
+                    [[material]]\nyoung = 1e7\npoisson = 0.25\ndensity = 1000.0\n\n\
+                    [simulation]\nduration = 1e-4\n";
+        let scene = Scene::parse(text, std::path::Path::new("t.toml")).unwrap();
+        let setup = Setup::new(&scene, None).unwrap();
+        let family = setup.driver.solver().model().discretization().family();
+        let n = family.len() as u32;
+        // A third of the bonds broken, both directions together as damage breaks them.
+        let state: Vec<u8> = (0..family.len())
+            .flat_map(|i| {
+                family
+                    .row(i)
+                    .iter()
+                    .map(move |&j| u8::from(!(i as u32 + j).is_multiple_of(3)))
+            })
+            .collect();
+        let pairwise = |state: Option<&[u8]>, i: u32, j: u32| {
+            let one_way = |a: u32, b: u32| {
+                let range = family.range(a as usize);
+                match family.row(a as usize).binary_search(&b) {
+                    Ok(k) => state.is_none_or(|s| s[range.start + k] != 0),
+                    Err(_) => false,
+                }
+            };
+            one_way(i, j) && one_way(j, i)
+        };
+        let (mut bonded, mut broken) = (0, 0);
+        for state in [None, Some(&state[..])] {
+            let bonds = FamilyBonds { family, state };
+            for i in 0..n {
+                // Every particle but itself, in increasing order.
+                let candidates: Vec<u32> = (0..n).filter(|&j| j != i).collect();
+                let mut out = vec![9u8; candidates.len()];
+                bonds.flags(i, &candidates, &mut out);
+                for (&j, &o) in candidates.iter().zip(&out) {
+                    let want = pairwise(state, i, j);
+                    assert_eq!(o, u8::from(want), "{i} {j}");
+                    if want {
+                        bonded += 1;
+                    } else if family.row(i as usize).contains(&j) {
+                        broken += 1;
+                    }
+                }
+            }
+        }
+        assert!(bonded > 0 && broken > 0, "{bonded} {broken}");
+    }
 }

@@ -305,7 +305,7 @@ fn self_contact_keys_are_checked() {
         (
             "self_contact = false\nself_contact_friction = 0.1",
             "simulation.self_contact_friction",
-            "self_contact = true",
+            "self_contact = false turns off",
         ),
         (
             "self_contact = true\nself_contact_distance = 0.0",
@@ -320,7 +320,12 @@ fn self_contact_keys_are_checked() {
         (
             "self_contact = true\nself_contact_stiffness = inf",
             "simulation.self_contact_stiffness",
-            "positive and finite",
+            "finite and >= 0",
+        ),
+        (
+            "self_contact = true\nself_contact_stiffness = -1.0",
+            "simulation.self_contact_stiffness",
+            "finite and >= 0",
         ),
     ] {
         let e = refusal(&with(extra)).to_string();
@@ -332,4 +337,20 @@ fn self_contact_keys_are_checked() {
         Setup::with_limits(&scene(&with("self_contact = true")), None, &limits()).unwrap();
     assert!(touching.driver.self_contact().is_some() && plain.driver.self_contact().is_none());
     assert!(touching.info.dt_limit < plain.info.dt_limit);
+    // Stiffness 0 measures overlaps and pushes nothing: the step is that without contact.
+    let measuring = Setup::with_limits(
+        &scene(&with("self_contact = true\nself_contact_stiffness = 0.0")),
+        None,
+        &limits(),
+    )
+    .unwrap();
+    assert!(measuring.driver.self_contact().is_some());
+    assert_eq!(measuring.info.dt_limit, plain.info.dt_limit);
+    // On by default where a material can break, and off when the scene says so.
+    let brittle = TINY.replace("density = 1000.0", "density = 1000.0\ns_crit = 0.01");
+    let on = Setup::with_limits(&scene(&brittle), None, &limits()).unwrap();
+    assert!(on.driver.self_contact().is_some());
+    let off = brittle.replace("duration = 1e-4", "duration = 1e-4\nself_contact = false");
+    let off = Setup::with_limits(&scene(&off), None, &limits()).unwrap();
+    assert!(off.driver.self_contact().is_none());
 }

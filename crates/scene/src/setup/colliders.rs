@@ -10,13 +10,15 @@ use crate::error::SceneError;
 use crate::schema::SceneFile;
 
 use super::check::{contact_coefficients, Ctx};
+use super::material::Materials;
 
 /// What the colliders add to the highest frequency of the system, for the stable step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct ContactStiffness {
-    /// Sum of the penalty stiffnesses of all colliders (N/m): a particle can touch every
-    /// collider at once (squeezed between a ball and the ground, say), never one twice.
-    pub per_particle: f64,
+    /// Largest `omega^2` (1/s^2) of a particle on the colliders: the sum of their penalty
+    /// stiffnesses (a particle can touch every collider at once, squeezed between a ball and
+    /// the ground say, never one twice) times the largest stiffness scale over mass.
+    pub collider_omega2: f64,
     /// Largest `omega^2` (1/s^2) of a dynamic ball on the particles it can touch at once,
     /// `n k / M` with `n = 4 ((R + r) / r)^2` (as many contact spheres of radius `r` as fit
     /// around it): a light ball rings faster than the particles it hits.
@@ -26,14 +28,41 @@ pub(super) struct ContactStiffness {
     pub self_omega2: f64,
 }
 
+/// Per particle, the factor on the colliders' stiffness that makes it `factor E_i r_i` (its
+/// material's Young's modulus `E_i`, Pa, and its contact radius `r_i`, m) when the colliders
+/// are built at `young` (Pa) and `radius` (m): `E_i r_i / (young radius)`.
+pub(super) fn stiffness_scale(
+    materials: &Materials,
+    ids: &[u16],
+    radii: &[f64],
+    young: f64,
+    radius: f64,
+) -> Vec<f64> {
+    let reference = young * radius;
+    ids.iter()
+        .zip(radii)
+        .map(|(&id, &r)| {
+            let s = materials.young(id as usize) * r / reference;
+            if s.is_finite() {
+                s
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
 /// The colliders and their stiffness, or `None` when the scene has none. `young` (Pa) and
-/// `radius` (mean contact radius, m) scale the penalty stiffness.
+/// `radius` (mean contact radius, m) scale the penalty stiffness of a reference particle;
+/// particle `i` gets `scale[i]` times it, and has mass `masses[i]` (kg).
 pub(super) fn build_colliders(
     ctx: &Ctx,
     f: &SceneFile,
     young: f64,
     radius: f64,
     gravity: [f64; 3],
+    scale: &[f64],
+    masses: &[f64],
 ) -> Result<Option<(Colliders, ContactStiffness)>, SceneError> {
     if f.ground.is_empty() && f.ball.is_empty() {
         return Ok(None);
@@ -44,6 +73,12 @@ pub(super) fn build_colliders(
         ContactParams::from_material(young, radius, k, d, mu)
     };
     let mut stiffness = ContactStiffness::default();
+    let scale_max = scale.iter().cloned().fold(0.0, f64::max);
+    let scale_over_mass = scale
+        .iter()
+        .zip(masses)
+        .map(|(&s, &m)| if m > 0.0 { s / m } else { 0.0 })
+        .fold(0.0, f64::max);
     let grounds: Vec<GroundDesc> = f
         .ground
         .iter()
@@ -66,7 +101,7 @@ pub(super) fn build_colliders(
         let params = params(b.stiffness_factor, b.damping_ratio, b.friction);
         if let Some(m) = mass {
             let touching = 4.0 * ((b.radius + radius) / radius).powi(2);
-            let omega2 = touching * params.stiffness / m;
+            let omega2 = touching * scale_max * params.stiffness / m;
             if !omega2.is_finite() {
                 return Err(ctx.err(
                     format!("ball[{i}].radius"),
@@ -87,11 +122,12 @@ pub(super) fn build_colliders(
             params,
         });
     }
-    stiffness.per_particle = grounds
+    let sum: f64 = grounds
         .iter()
         .map(|g| g.params.stiffness)
         .chain(balls.iter().map(|b| b.params.stiffness))
         .sum();
+    stiffness.collider_omega2 = sum * scale_over_mass;
     Colliders::new(grounds, balls, gravity)
         .map(|c| Some((c, stiffness)))
         .map_err(|e| ctx.err("ball/ground", e.to_string()))

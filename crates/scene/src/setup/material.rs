@@ -40,6 +40,14 @@ impl Materials {
         }
     }
 
+    /// Whether any material can break (has fracture parameters).
+    pub(super) fn any_breaks(&self) -> bool {
+        match self {
+            Materials::Chen(m) => m.iter().any(|m| m.fracture.is_some()),
+            Materials::Xu(m) => m.iter().any(|m| m.fracture.is_some()),
+        }
+    }
+
     /// The model's name in the scene file.
     pub(super) fn name(&self) -> &'static str {
         match self {

@@ -230,9 +230,23 @@ impl Setup {
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;
         let young = materials.max_young();
         let gravity = sim.gravity.unwrap_or([0.0; 3]);
-        let colliders = colliders::build_colliders(&ctx, f, young, mean_radius, gravity)?;
-        if let Some((col, _)) = &colliders {
+        // Each particle's collider stiffness from its own material and size: `E_i r_i` over
+        // the reference `E_max r_mean` the colliders are built with.
+        let stiffness_scale =
+            colliders::stiffness_scale(&materials, &ids, &radii, young, mean_radius);
+        let mut colliders = colliders::build_colliders(
+            &ctx,
+            f,
+            young,
+            mean_radius,
+            gravity,
+            &stiffness_scale,
+            model.as_dyn().masses(),
+        )?;
+        if let Some((col, _)) = &mut colliders {
             colliders::check_placement(&ctx, col, &mesh, &rest, &radii)?;
+            col.set_stiffness_scale(stiffness_scale)
+                .map_err(|e| ctx.err("ball/ground", e.to_string()))?;
         }
         let mut contact = colliders.as_ref().map(|(_, k)| *k).unwrap_or_default();
         let self_contact = self_contact::build(&ctx, sim, &materials, &ids, &rest, &radii)?;

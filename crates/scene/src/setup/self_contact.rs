@@ -15,8 +15,9 @@ use super::material::Materials;
 /// distance), 0.25 shortens it to 0.76 of the step without self contact (5.8%).
 const STIFFNESS_FACTOR: f64 = 0.25;
 
-/// Self contact when the scene asks for it: particles at `rest` (m) with contact `radii` (m)
-/// and material ids `ids` into `materials`; `None` when it is off.
+/// Self contact when the scene asks for it, or by default when any material can break:
+/// particles at `rest` (m) with contact `radii` (m) and material ids `ids` into `materials`;
+/// `None` when it is off.
 pub(super) fn build(
     ctx: &Ctx,
     sim: &SimulationSpec,
@@ -31,18 +32,21 @@ pub(super) fn build(
         ("self_contact_damping", sim.self_contact_damping),
         ("self_contact_friction", sim.self_contact_friction),
     ];
-    if sim.self_contact != Some(true) {
+    // On by default when something can break: fragments and crack faces then meet.
+    if !sim.self_contact.unwrap_or(materials.any_breaks()) {
         if let Some((key, _)) = keys.iter().find(|(_, v)| v.is_some()) {
-            return Err(ctx.err(
-                format!("simulation.{key}"),
-                "applies to self contact: set self_contact = true",
-            ));
+            let why = match sim.self_contact {
+                Some(false) => "applies to self contact, which self_contact = false turns off",
+                _ => "applies to self contact, off where no material can break: set self_contact = true",
+            };
+            return Err(ctx.err(format!("simulation.{key}"), why));
         }
         return Ok(None);
     }
     let base = SelfContactParams::default();
     let factor = match sim.self_contact_stiffness {
-        Some(k) => ctx.positive("simulation.self_contact_stiffness", k, "")?,
+        // 0 measures how deep unbonded particles pass through each other without pushing.
+        Some(k) => ctx.non_negative("simulation.self_contact_stiffness", k)?,
         None => STIFFNESS_FACTOR,
     };
     let distance_factor = match sim.self_contact_distance {

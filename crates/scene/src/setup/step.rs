@@ -14,17 +14,16 @@ use super::defaults;
 
 /// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
 /// (power iteration on the linearised forces at `rest`, Silling-Askari when it fails), all
-/// contact springs on the lightest particle, the fastest dynamic ball on the particles it
-/// touches and contact between particles (see [`ContactStiffness`]), with the lightest particle's mass from `model`.
+/// collider springs on the particle that rings fastest on them, the fastest dynamic ball on
+/// the particles it touches and contact between particles (see [`ContactStiffness`]).
 pub(super) fn stable_limit(
     model: &mut dyn ForceModel,
     rest: &[[f64; 3]],
     horizon: f64,
     contact: ContactStiffness,
 ) -> f64 {
-    let m_min = model.masses().iter().cloned().fold(f64::INFINITY, f64::min);
     let (omega, _) = stable_frequency(model, rest, horizon);
-    2.0 / (omega * omega + contact.per_particle / m_min + contact.ball_omega2 + contact.self_omega2)
+    2.0 / (omega * omega + contact.collider_omega2 + contact.ball_omega2 + contact.self_omega2)
         .sqrt()
 }
 
