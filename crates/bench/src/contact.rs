@@ -128,7 +128,8 @@ pub fn wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Ben
         let scene =
             Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(name, &e))?;
         let m = step_scene(name, &scene, None, progress)?;
-        let touching = name != "off";
+        // Without contact between particles there is no list and no pair to report.
+        let measured = |v: String| if name == "off" { "-".into() } else { v };
         t.push(vec![
             name.into(),
             format!("{:.3e}", m.dt),
@@ -136,26 +137,14 @@ pub fn wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Ben
             format!("{:.1}", m.wall),
             format!("{:.2}", 1e3 * m.wall / m.steps.max(1) as f64),
             percent(m.contact_share),
-            match touching {
-                true => format!("{:.1}", 100.0 * m.builds as f64 / m.steps.max(1) as f64),
-                false => "-".into(),
-            },
-            match touching {
-                true => format!("{:.1}", m.candidates_per_particle),
-                false => "-".into(),
-            },
-            match touching {
-                true => m.most_pairs.to_string(),
-                false => "-".into(),
-            },
-            match touching {
-                true => format!("{:.3}", 1e3 * m.deepest.0),
-                false => "-".into(),
-            },
-            match touching {
-                true => percent(m.deepest.1),
-                false => "-".into(),
-            },
+            measured(format!(
+                "{:.1}",
+                100.0 * m.builds as f64 / m.steps.max(1) as f64
+            )),
+            measured(format!("{:.1}", m.candidates_per_particle)),
+            measured(m.most_pairs.to_string()),
+            measured(format!("{:.3}", 1e3 * m.deepest.0)),
+            measured(percent(m.deepest.1)),
             m.broken.to_string(),
             m.fragments.to_string(),
         ]);

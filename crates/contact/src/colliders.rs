@@ -413,11 +413,6 @@ impl Colliders {
         Ok(())
     }
 
-    /// The per-particle stiffness factors of [`Colliders::set_stiffness_scale`] (empty: all 1).
-    pub fn stiffness_scale(&self) -> &[f64] {
-        &self.stiffness_scale
-    }
-
     /// Mass (kg) the ball-ground stiffness is scaled against (see
     /// [`Colliders::ball_ground_stiffness`]). Set automatically on the first [`Colliders::step`]
     /// with particles, unless set here first, to the smallest particle mass over its stiffness
