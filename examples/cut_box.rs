@@ -66,6 +66,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         faces: &surface.faces,
         crack: Some(&surface.crack),
         colors: Some(&colors),
+        ..Default::default()
     };
     write_ply(
         &out.join("cut_box.ply"),

@@ -62,6 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             faces: &surface.faces,
             crack: Some(&surface.crack),
             colors: None,
+            ..Default::default()
         };
         let path = out.join(format!("frame_{frame:04}.ply"));
         write_ply(&path, &view, PlyEncoding::BinaryLittleEndian)?;

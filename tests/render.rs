@@ -56,6 +56,7 @@ fn make_run(dir: &Path) {
             faces: &s.faces,
             crack: Some(&s.crack),
             colors: None,
+            ..Default::default()
         };
         let ply = format!("frames/surface_{index:04}.ply");
         write_ply(&dir.join(&ply), &view, PlyEncoding::BinaryLittleEndian).unwrap();

@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 
 use common::{fails, ok, perifrac, tiny_wall};
-use perifrac_io::{read_ply_crack, read_ply_points};
+use perifrac_io::{read_ply_crack, read_ply_frame, read_ply_points};
 use perifrac_topology::Surface;
 
 fn s(p: &Path) -> &str {
@@ -106,34 +106,79 @@ fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
         assert!(damage.iter().all(|d| (0.0..=1.0).contains(d)));
     }
 
-    // The last frame: cracks, several fragments, each with a closed, outward surface.
+    // The last frame: cracks, several fragments, each with a closed, outward surface. Its
+    // vertices are split where shading is sharp; the copies of a mesh vertex share its
+    // `vertex_id` and position, so welding by id gives the fragments' closed surfaces.
     let last = frames.last().unwrap();
-    let (surface, crack) = read_ply_crack(&out.join(last["surface"].as_str().unwrap())).unwrap();
-    let crack = crack.unwrap();
+    let frame = read_ply_frame(&out.join(last["surface"].as_str().unwrap())).unwrap();
+    let crack = frame.crack.unwrap();
     let crack_faces = crack.iter().filter(|&&c| c != 0).count();
     assert!(crack_faces > 0, "no crack faces in the last frame");
     assert_eq!(
         crack_faces as u64,
         last["crack_triangles"].as_u64().unwrap()
     );
-    let (count, of_face) = components(&surface.faces, surface.vertices.len());
+    let ids = frame.vertex_ids.unwrap();
+    let n = ids.iter().max().map_or(0, |&m| m as usize + 1);
+    let mut welded = vec![[f64::NAN; 3]; n];
+    for (p, &id) in frame.vertices.iter().zip(&ids) {
+        let w = &mut welded[id as usize];
+        if w[0].is_nan() {
+            *w = p.map(f64::from);
+        }
+        assert_eq!(*w, p.map(f64::from), "copies of vertex {id} apart");
+    }
+    let faces: Vec<[u32; 3]> = frame
+        .faces
+        .iter()
+        .map(|f| f.map(|v| ids[v as usize]))
+        .collect();
+    let (count, of_face) = components(&faces, n);
     assert_eq!(count as u64, last["fragments"].as_u64().unwrap());
     assert!(count > 1, "the wall did not break: {count} fragment(s)");
-    // One surface per fragment: its faces over the frame's (shared, uncompacted) vertices.
+    // The connected pieces are the fragments the faces name.
+    let fragment = frame.fragment.unwrap();
+    for (f, &c) in of_face.iter().enumerate() {
+        let first = of_face.iter().position(|&x| x == c).unwrap();
+        assert_eq!(fragment[f], fragment[first], "face {f}");
+    }
+    // One surface per fragment: its faces over the frame's (welded) vertices.
     let mut fragments = vec![
         Surface {
-            vertices: surface.vertices.clone(),
+            vertices: welded.clone(),
             ..Surface::default()
         };
         count
     ];
-    for (f, &c) in surface.faces.iter().zip(&of_face) {
+    for (f, &c) in faces.iter().zip(&of_face) {
         fragments[c].faces.push(*f);
     }
     for (c, fragment) in fragments.iter().enumerate() {
         assert!(fragment.is_closed(), "fragment {c} is not closed");
         let volume = fragment.signed_volume();
         assert!(volume > 0.0, "fragment {c} is inside out: {volume}");
+    }
+    // Normals are unit and outward: against the face they belong to.
+    let normals = frame.normals.unwrap();
+    for (f, face) in frame.faces.iter().enumerate() {
+        let [a, b, c] = face.map(|v| frame.vertices[v as usize].map(f64::from));
+        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let fnormal = [
+            e1[1] * e2[2] - e1[2] * e2[1],
+            e1[2] * e2[0] - e1[0] * e2[2],
+            e1[0] * e2[1] - e1[1] * e2[0],
+        ];
+        for &v in face {
+            let nv = normals[v as usize].map(f64::from);
+            let len = (nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]).sqrt();
+            // Unit to f32 rounding.
+            assert!((len - 1.0).abs() < 1e-6, "normal {nv:?}");
+            let along = nv[0] * fnormal[0] + nv[1] * fnormal[1] + nv[2] * fnormal[2];
+            // Smooth normals lean off a face by less than the sharp angle (60 degrees), so
+            // never point into it; a degenerate face has no direction to compare.
+            assert!(along >= 0.0, "face {f}: normal {nv:?} against {fnormal:?}");
+        }
     }
 
     // A second run with the same scene and thread count writes the same bytes.

@@ -7,8 +7,8 @@ use crate::{CheckpointError, Reader, Writer};
 pub const MAGIC: &[u8; 8] = b"PFCKPT\r\n";
 
 /// The layout version this build writes and reads; a file of another version is refused.
-/// 2: the driver's self-contact counters; 3: its contact time.
-pub const FORMAT_VERSION: u32 = 3;
+/// 2: the driver's self-contact counters; 3: its contact time; 4: its fragment ids.
+pub const FORMAT_VERSION: u32 = 4;
 
 /// What a checkpoint says about itself.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -65,6 +65,7 @@ fn convert_surface(input: &Path, output: &Path) -> Result<()> {
         faces: &surface.faces,
         crack: None,
         colors: None,
+        ..Default::default()
     };
     perifrac_io::write_surface(output, &view)?;
     eprintln!(

@@ -5,6 +5,7 @@
 
 mod bench;
 mod convert;
+mod export;
 mod info;
 mod load;
 mod mesh;
@@ -71,6 +72,9 @@ enum Command {
     Run(run::RunArgs),
     /// Write a POV-Ray scene per frame of a run directory, and PNGs when povray is installed.
     Render(render::RenderArgs),
+    /// Write a run directory's frames as one animated cache file (USD) for Blender, Houdini,
+    /// Maya or any USD reader.
+    Export(export::ExportArgs),
     /// Measure accuracy against references, stability on hard cases, and speed.
     Bench(bench::BenchArgs),
     /// Summarise a tet mesh: counts, volume, edge length, quality, pieces, problems.
@@ -113,6 +117,7 @@ fn main() -> ExitCode {
         Command::Info { mesh, json } => info::run(&mesh, json),
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Export(args) => export::run(&args),
         Command::Bench(args) => bench::run(&args),
     };
     match result {

@@ -15,7 +15,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
-use perifrac_io::{atomic_write, read_ply_crack, write_povray_mesh2, SurfaceRef};
+use perifrac_io::{atomic_write, read_ply_frame, write_povray_mesh2, SurfaceRef};
 use perifrac_physics::math::{add, cross, dot, norm, scale, sub};
 use perifrac_scene::output::{BallJson as Ball, Bounds, GroundJson as Ground};
 use perifrac_scene::{POVRAY_MESH_NAME as MESH_NAME, RUN_FORMAT};
@@ -114,7 +114,8 @@ struct View {
     e2: [f64; 3],
     /// Longest side of the framed bounds.
     extent: f64,
-    /// Lowest point of the framed bounds along `up` (a backdrop floor goes below it).
+    /// Lowest point along `up` of the framed bounds and of every frame's whole bounds (a
+    /// backdrop floor goes below it).
     lowest: f64,
     /// Width over height of the picture.
     aspect: f64,
@@ -315,7 +316,15 @@ fn frame_view(run: &RunFile, width: u32, height: u32) -> Result<View> {
             b.max[k] = b.max[k].max(other.max[k]);
         }
     }
-    Ok(view_of(b, run.up, f64::from(width) / f64::from(height)))
+    let mut view = view_of(b, run.up, f64::from(width) / f64::from(height));
+    // The backdrop goes below everything any frame holds, debris that left the framed bounds
+    // included (the wall's exit plume falls below the slab), so that it hides no fragment.
+    for full in run.frames.iter().filter_map(|f| f.bounds.as_ref()) {
+        for p in corners(full) {
+            view.lowest = view.lowest.min(dot(p, view.up));
+        }
+    }
+    Ok(view)
 }
 
 /// Places the camera so the 8 corners of `b` fall inside [`FILL`] of the picture.
@@ -384,14 +393,20 @@ fn frame_include(dir: &Path, render_dir: &Path, frame: &Frame) -> Result<String>
         frame.index,
         ply.display()
     );
-    let (surface, crack) = read_ply_crack(&ply)
+    let surface = read_ply_frame(&ply)
         .with_context(|| format!("frame {}: reading the surface", frame.index))?;
     let name = format!("surface_{:04}.inc", frame.index);
+    let vertices: Vec<[f64; 3]> = surface.vertices.iter().map(|p| p.map(f64::from)).collect();
+    let normals: Option<Vec<[f64; 3]>> = surface
+        .normals
+        .as_ref()
+        .map(|n| n.iter().map(|p| p.map(f64::from)).collect());
     let view = SurfaceRef {
-        vertices: &surface.vertices,
+        vertices: &vertices,
         faces: &surface.faces,
-        crack: crack.as_deref(),
-        colors: None,
+        crack: surface.crack.as_deref(),
+        normals: normals.as_deref(),
+        ..Default::default()
     };
     write_povray_mesh2(&render_dir.join(&name), &view, MESH_NAME).with_context(|| {
         format!(

@@ -232,18 +232,22 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     eprintln!(
         "time per stage: physics {:.0}% (contact {:.0}%), topology {:.0}%, advection {:.0}%, \
-         output {:.0}%",
+         output {:.0}% ({:.2} s)",
         share(t.physics),
         share(t.contact),
         share(t.topology),
         share(t.advect),
-        share(t.output)
+        share(t.output),
+        t.output.as_secs_f64()
     );
     eprintln!(
         "{} frames in {}",
         summary.frames_written,
         dir.join("frames").display()
     );
+    if let Some((usd, took)) = &summary.usd {
+        eprintln!("{}", crate::export::describe(usd, *took));
+    }
     Ok(())
 }
 

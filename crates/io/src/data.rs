@@ -30,8 +30,9 @@ pub struct SurfaceData {
     pub faces: Vec<[u32; 3]>,
 }
 
-/// Borrowed surface for output: optional per-face crack flag (0/1) and per-vertex RGB colour.
-#[derive(Debug, Clone, Copy)]
+/// Borrowed surface for output: optional per-face crack flag (0/1) and fragment id, and
+/// optional per-vertex RGB colour, normal, velocity, texture coordinates and id.
+#[derive(Debug, Clone, Copy, Default)]
 pub struct SurfaceRef<'a> {
     /// Vertex coordinates.
     pub vertices: &'a [[f64; 3]],
@@ -41,6 +42,17 @@ pub struct SurfaceRef<'a> {
     pub crack: Option<&'a [u8]>,
     /// Per vertex colour; same length as `vertices`.
     pub colors: Option<&'a [[u8; 3]]>,
+    /// Per vertex unit normal; same length as `vertices`.
+    pub normals: Option<&'a [[f64; 3]]>,
+    /// Per vertex velocity (length/time); same length as `vertices`.
+    pub velocities: Option<&'a [[f64; 3]]>,
+    /// Per vertex texture coordinates; same length as `vertices`.
+    pub uv: Option<&'a [[f64; 2]]>,
+    /// Per vertex id (the tet-mesh vertex a split shading vertex copies, so a reader can weld
+    /// the copies); same length as `vertices`.
+    pub vertex_ids: Option<&'a [u32]>,
+    /// Per face fragment id; same length as `faces`.
+    pub fragment: Option<&'a [u32]>,
 }
 
 impl<'a> SurfaceRef<'a> {
@@ -49,27 +61,48 @@ impl<'a> SurfaceRef<'a> {
         SurfaceRef {
             vertices,
             faces,
-            crack: None,
-            colors: None,
+            ..SurfaceRef::default()
         }
     }
 
     /// Checks array lengths and face indices before a writer starts.
     pub(crate) fn validate(&self, file: &std::path::Path) -> Result<(), crate::IoError> {
         let n = self.vertices.len();
-        if let Some(c) = self.crack {
-            if c.len() != self.faces.len() {
+        let m = self.faces.len();
+        let lengths = [
+            ("crack flags", self.crack.map(<[u8]>::len), m, "faces"),
+            ("fragment ids", self.fragment.map(<[u32]>::len), m, "faces"),
+            ("colours", self.colors.map(<[[u8; 3]]>::len), n, "vertices"),
+            (
+                "normals",
+                self.normals.map(<[[f64; 3]]>::len),
+                n,
+                "vertices",
+            ),
+            (
+                "velocities",
+                self.velocities.map(<[[f64; 3]]>::len),
+                n,
+                "vertices",
+            ),
+            (
+                "texture coordinates",
+                self.uv.map(<[[f64; 2]]>::len),
+                n,
+                "vertices",
+            ),
+            (
+                "vertex ids",
+                self.vertex_ids.map(<[u32]>::len),
+                n,
+                "vertices",
+            ),
+        ];
+        for (what, len, expected, of) in lengths {
+            if let Some(len) = len.filter(|&l| l != expected) {
                 return Err(crate::IoError::invalid(
                     file,
-                    format!("{} crack flags for {} faces", c.len(), self.faces.len()),
-                ));
-            }
-        }
-        if let Some(c) = self.colors {
-            if c.len() != n {
-                return Err(crate::IoError::invalid(
-                    file,
-                    format!("{} colours for {n} vertices", c.len()),
+                    format!("{len} {what} for {expected} {of}"),
                 ));
             }
         }

@@ -13,7 +13,8 @@
 //! ```
 //!
 //! Undeclared ones get neutral defaults (`#ifndef`). Without crack flags no `texture_list` is
-//! written, so `object { NAME texture { ... } }` in the scene decides. Vertex colours are not
+//! written, so `object { NAME texture { ... } }` in the scene decides. Vertex normals, when
+//! given, are written as `normal_vectors` (smooth shading between them); vertex colours are not
 //! written.
 
 use crate::numfmt::write_xyz_sep;
@@ -63,6 +64,17 @@ pub fn write_povray_mesh2(path: &Path, surface: &SurfaceRef, name: &str) -> Resu
             w.write_all(b">\n")?;
         }
         w.write_all(b"  }\n")?;
+        if let Some(normals) = surface.normals {
+            // As many normals as vertices and no normal_indices: POV-Ray takes the face
+            // indices for the normals too, and interpolates them across each face.
+            writeln!(w, "  normal_vectors {{\n    {}", normals.len())?;
+            for n in normals {
+                w.write_all(b"    ,<")?;
+                write_xyz_sep(w, n, b",")?;
+                w.write_all(b">\n")?;
+            }
+            w.write_all(b"  }\n")?;
+        }
         if surface.crack.is_some() {
             writeln!(w, "  texture_list {{ 2, texture {{ {name}_surface_texture }}, texture {{ {name}_crack_texture }} }}")?;
         }

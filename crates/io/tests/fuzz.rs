@@ -38,6 +38,7 @@ fn seeds() -> Vec<(String, Vec<u8>)> {
         faces: &mesh.boundary_faces,
         crack: Some(&crack),
         colors: Some(&colors),
+        ..Default::default()
     };
     for (enc, name) in [
         (PlyEncoding::Ascii, "a.ply"),

@@ -32,6 +32,7 @@ fn surface() -> SurfaceRef<'static> {
         faces: &FACES,
         crack: Some(&CRACK),
         colors: Some(&COLORS),
+        ..Default::default()
     }
 }
 
@@ -148,15 +149,19 @@ fn povray_mesh2_structure() {
     assert!(text.contains(",<0,1,2>,0"));
     assert!(text.contains(",<0.25,-2.5,1000.0>"));
     assert!(write_povray_mesh2(&path, &surface(), "9bad name").is_err());
-    // Render a tiny scene if POV-Ray happens to be installed.
+    render_include(dir.path(), "perifrac_mesh");
+}
+
+/// Renders `dir/s.inc`'s mesh `name` in a tiny scene if POV-Ray happens to be installed.
+fn render_include(dir: &Path, name: &str) {
     if Command::new("povray").arg("--version").output().is_err() {
         eprintln!("SKIPPED: povray not on PATH, include not rendered");
         return;
     }
-    let scene = dir.path().join("scene.pov");
-    std::fs::write(&scene, "#include \"s.inc\"\ncamera { location <2,2,-3> look_at 0 }\nlight_source { <5,5,-5> rgb 1 }\nobject { perifrac_mesh }\n").unwrap();
+    let scene = dir.join("scene.pov");
+    std::fs::write(&scene, format!("#include \"s.inc\"\ncamera {{ location <2,2,-3> look_at 0 }}\nlight_source {{ <5,5,-5> rgb 1 }}\nobject {{ {name} }}\n")).unwrap();
     let status = Command::new("povray")
-        .current_dir(dir.path())
+        .current_dir(dir)
         .args(["+Iscene.pov", "+W32", "+H32", "-D", "+Oout.png"])
         .output()
         .unwrap();
@@ -166,7 +171,7 @@ fn povray_mesh2_structure() {
         String::from_utf8_lossy(&status.stderr)
     );
     // POV-Ray writes the image only when the include parsed.
-    assert!(dir.path().join("out.png").exists());
+    assert!(dir.join("out.png").exists());
 }
 
 #[test]
@@ -216,4 +221,111 @@ fn real_surfaces_load() {
         let n = s.vertices.len() as u32;
         assert!(s.faces.iter().flatten().all(|&i| i < n), "{name}");
     }
+}
+
+const NORMALS: [[f64; 3]; 5] = [
+    [0.0, 0.0, -1.0],
+    [0.6, 0.0, -0.8],
+    [0.0, 1.0, 0.0],
+    [-1.0, 0.0, 0.0],
+    [0.0, 0.8, 0.6],
+];
+const VELOCITIES: [[f64; 3]; 5] = [
+    [1.0, 2.0, 3.0],
+    [0.0; 3],
+    [-4.5, 0.0, 1e-3],
+    [0.0, 0.0, -9.81],
+    [1e4, 0.0, 0.0],
+];
+const UV: [[f64; 2]; 5] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5], [0.25, 0.75]];
+const IDS: [u32; 5] = [0, 1, 1, 3, 4_000_000_000];
+const FRAGMENT: [u32; 4] = [0, 0, 7, 7];
+
+fn frame_surface() -> SurfaceRef<'static> {
+    SurfaceRef {
+        normals: Some(&NORMALS),
+        velocities: Some(&VELOCITIES),
+        uv: Some(&UV),
+        vertex_ids: Some(&IDS),
+        fragment: Some(&FRAGMENT),
+        colors: None,
+        ..surface()
+    }
+}
+
+#[test]
+fn frame_attributes_read_by_plyfile() {
+    if !have_plyfile() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (encoding, name) in [
+        (PlyEncoding::BinaryLittleEndian, "b.ply"),
+        (PlyEncoding::Ascii, "a.ply"),
+    ] {
+        let path = dir.path().join(name);
+        write_ply(&path, &frame_surface(), encoding).unwrap();
+        let script = "import sys, plyfile\n\
+            d = plyfile.PlyData.read(sys.argv[1])\n\
+            v = d['vertex'].data; f = d['face'].data\n\
+            for k in ['nx', 'ny', 'nz', 'vx', 'vy', 'vz', 's', 't', 'vertex_id']:\n\
+            \x20   print(k, ' '.join(repr(float(x)) for x in v[k]))\n\
+            print('crack', ' '.join(str(int(c)) for c in f['crack']))\n\
+            print('fragment', ' '.join(str(int(c)) for c in f['fragment']))\n\
+            print(v.dtype['vertex_id'], f.dtype['fragment'])\n";
+        let out = Command::new("python3")
+            .args(["-c", script])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8(out.stdout).unwrap();
+        let row = |key: &str| -> Vec<f64> {
+            let line = text
+                .lines()
+                .find(|l| l.split(' ').next() == Some(key))
+                .unwrap();
+            line.split(' ')
+                .skip(1)
+                .map(|x| x.parse().unwrap())
+                .collect()
+        };
+        for (k, key) in ["nx", "ny", "nz"].iter().enumerate() {
+            let want: Vec<f64> = NORMALS.iter().map(|n| f64::from(n[k] as f32)).collect();
+            assert_eq!(row(key), want, "{name} {key}");
+        }
+        for (k, key) in ["vx", "vy", "vz"].iter().enumerate() {
+            let want: Vec<f64> = VELOCITIES.iter().map(|n| f64::from(n[k] as f32)).collect();
+            assert_eq!(row(key), want, "{name} {key}");
+        }
+        for (k, key) in ["s", "t"].iter().enumerate() {
+            let want: Vec<f64> = UV.iter().map(|n| f64::from(n[k] as f32)).collect();
+            assert_eq!(row(key), want, "{name} {key}");
+        }
+        let ids: Vec<f64> = IDS.iter().map(|&i| f64::from(i)).collect();
+        assert_eq!(row("vertex_id"), ids);
+        assert_eq!(row("crack"), vec![0.0, 1.0, 1.0, 0.0]);
+        assert_eq!(row("fragment"), vec![0.0, 0.0, 7.0, 7.0]);
+        // Unsigned 32-bit integers for both ids (4e9 would not fit a signed int).
+        assert!(text.contains("uint32 uint32"), "{text}");
+    }
+}
+
+#[test]
+fn povray_mesh2_with_normals_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.inc");
+    write_povray_mesh2(&path, &frame_surface(), "m").unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        text.contains("normal_vectors {\n    5\n    ,<0.0,0.0,-1.0>"),
+        "{text}"
+    );
+    // Vertices, normals and faces, one `,<` each.
+    assert_eq!(text.matches(",<").count(), 5 + 5 + 4);
+    render_include(dir.path(), "m");
 }

@@ -8,7 +8,9 @@ use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use perifrac_contact::{Bonds, Colliders, ContactStats, SelfContact, SelfContactStats};
 use perifrac_physics::math::Vec3;
 use perifrac_physics::{Environment, External, Family, ImplicitEnvironment, PhysicsError, Solver};
-use perifrac_topology::TetMesh;
+use perifrac_topology::{Pieces, TetMesh};
+
+use crate::fragments::{FragmentBirth, FragmentIds};
 
 /// Wall time spent in each stage since the driver was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -70,6 +72,8 @@ pub struct Driver {
     self_deepest: SelfContactStats,
     self_last: SelfContactStats,
     times: StageTimes,
+    /// Stable fragment ids, updated at every frame written.
+    fragments: FragmentIds,
 }
 
 impl Driver {
@@ -97,6 +101,7 @@ impl Driver {
             self_deepest: SelfContactStats::default(),
             self_last: SelfContactStats::default(),
             times: StageTimes::default(),
+            fragments: FragmentIds::default(),
         }
     }
 
@@ -243,13 +248,25 @@ impl Driver {
         self.crack_faces
     }
 
+    /// The stable ids of the mesh's `pieces` at frame `frame` (`ids[piece]`), recorded for
+    /// the next frame (see [`crate::fragments`]). Call once per frame written, in order.
+    pub fn fragment_ids(&mut self, pieces: &Pieces, frame: usize) -> Vec<u32> {
+        self.fragments.update(pieces, frame)
+    }
+
+    /// Every fragment so far with its parent and first frame, in id order.
+    pub fn fragment_births(&self) -> &[FragmentBirth] {
+        self.fragments.births()
+    }
+
     /// Time spent per stage.
     pub fn stage_times(&self) -> StageTimes {
         self.times
     }
 
-    /// Writes everything a step changes: the mesh (cracks, copies, positions), the solver, the
-    /// balls, the anchors still to release and the counters.
+    /// Writes everything a step changes: the mesh (cracks, copies, positions), the fragment
+    /// ids of the last frame, the solver, the balls, the anchors still to release and the
+    /// counters.
     pub fn save(&self, w: &mut Writer) {
         w.tag("driver");
         w.usize(self.next_release);
@@ -260,6 +277,7 @@ impl Driver {
             w.f64(d.as_secs_f64());
         }
         self.mesh.save(w);
+        self.fragments.save(w);
         self.solver.save(w);
         w.bool(self.colliders.is_some());
         if let Some(c) = &self.colliders {
@@ -303,6 +321,7 @@ impl Driver {
             output: d(secs[4]),
         };
         self.mesh.restore(r)?;
+        self.fragments.restore(r, self.mesh.num_tets())?;
         self.solver.restore(r)?;
         // The pair list is derived from positions and bonds: built again at the next step.
         if let Some(sc) = &mut self.self_contact {

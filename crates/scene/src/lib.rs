@@ -24,16 +24,19 @@ pub mod budget;
 pub mod checkpoint;
 pub mod driver;
 pub mod error;
+pub mod fragments;
 pub mod load;
 pub mod output;
 pub mod run;
 pub mod schema;
 pub mod setup;
+pub mod usd;
 
 pub use budget::{Limits, WorkEstimate};
 pub use checkpoint::{Checkpoint, Position, CHECKPOINT_FILE};
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
+pub use fragments::{FragmentBirth, FragmentIds};
 pub use load::Scene;
 pub use output::{
     check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SelfContactJson,
@@ -41,3 +44,4 @@ pub use output::{
 };
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
 pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo};
+pub use usd::{export_usd, UsdLayout, UsdReport, DEFAULT_FPS};

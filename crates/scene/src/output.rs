@@ -1,9 +1,11 @@
 //! The run directory: `run.json` (written first, before anything else, then rewritten
 //! atomically after every frame and when the run stops, see [`RunManifest`]), `scene.toml` (the
-//! scene as run) and `frames/` with `surface_NNNN.ply` (binary PLY with the
-//! per-face `crack` flag), optionally `surface_NNNN.inc` (POV-Ray `mesh2` declaring
-//! [`POVRAY_MESH_NAME`]) and `particles_NNNN.ply` (points with `damage`, `mass` and
-//! `fragment`). Every file is written to a temporary name and renamed into place, so a reader
+//! scene as run) and `frames/` with `surface_NNNN.ply` (binary PLY: vertices split where
+//! the surface shades sharp, along crack edges and corners, with normals `nx ny nz`, velocities
+//! `vx vy vz` (m/s), texture coordinates `s t` and the mesh `vertex_id` they copy; faces with
+//! their `crack` flag and stable `fragment` id, see [`crate::fragments`]), optionally
+//! `surface_NNNN.inc` (POV-Ray `mesh2` with normals, declaring [`POVRAY_MESH_NAME`]) and
+//! `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`). Every file is written to a temporary name and renamed into place, so a reader
 //! never sees half a frame.
 
 use std::io::Write;
@@ -16,6 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::driver::Driver;
 use crate::error::SceneError;
+use crate::fragments::FragmentBirth;
 use crate::setup::{bounds, OutputOptions, Setup};
 
 /// The identifier of the run-directory layout, written into `run.json`.
@@ -54,8 +57,13 @@ pub struct RunManifest {
     pub dt_limit: f64,
     /// Total particle mass (kg).
     pub mass: f64,
+    /// Playback frames per second for caches made from the frames (`[output] fps`).
+    pub fps: f64,
     /// Frames written so far.
     pub frames: Vec<FrameJson>,
+    /// Every fragment so far, in id order, with the fragment it split from and the first frame
+    /// it appears in; the `fragment` ids of the frames' faces and particles are these.
+    pub fragments: Vec<FragmentBirth>,
     /// True once the last frame is written.
     pub finished: bool,
     /// Why the run stopped early, if it did.
@@ -209,7 +217,8 @@ pub struct FrameWriter {
 
 impl FrameWriter {
     /// Prepares `dir`: removes what an earlier run left there (`run.json`, `scene.toml`,
-    /// `checkpoint.bin`, `frames/`, `render/`) and nothing else, writes the initial `run.json` (no frames, not
+    /// `checkpoint.bin`, `frames/`, `render/`, the USD cache named after its scene) and
+    /// nothing else, writes the initial `run.json` (no frames, not
     /// finished), then `scene.toml` and `frames/`; a failure after `run.json` is recorded in
     /// it.
     pub fn create(dir: &Path, setup: &Setup) -> Result<FrameWriter, SceneError> {
@@ -271,7 +280,9 @@ impl FrameWriter {
             dt: info.dt,
             dt_limit: info.dt_limit,
             mass: info.mass,
+            fps: options.fps,
             frames: recorded,
+            fragments: driver.fragment_births().to_vec(),
             finished: false,
             error: None,
             solver: (info.model != "chen" || info.integrator != "explicit").then(|| SolverJson {
@@ -315,11 +326,26 @@ impl FrameWriter {
     ) -> Result<&FrameJson, SceneError> {
         let started = Instant::now();
         let (surface, pieces) = driver.mesh().surface_and_pieces();
+        let ids = driver.fragment_ids(&pieces, index);
+        let mesh = driver.mesh();
+        let velocities = mesh.vertex_velocities(driver.masses(), driver.solver().velocities());
+        let shaded = mesh.shade(&surface, &velocities, &mesh.shading_options());
+        let vertex_ids: Vec<u32> = shaded
+            .source
+            .iter()
+            .map(|&k| surface.vertex_ids[k as usize])
+            .collect();
+        let face_fragment: Vec<u32> = shaded.piece.iter().map(|&p| ids[p as usize]).collect();
         let name = format!("surface_{index:04}");
         let view = SurfaceRef {
-            vertices: &surface.vertices,
-            faces: &surface.faces,
-            crack: Some(&surface.crack),
+            vertices: &shaded.vertices,
+            faces: &shaded.faces,
+            crack: Some(&shaded.crack),
+            normals: Some(&shaded.normals),
+            velocities: Some(&shaded.velocities),
+            uv: Some(&shaded.uv),
+            vertex_ids: Some(&vertex_ids),
+            fragment: Some(&face_fragment),
             colors: None,
         };
         write_ply(
@@ -337,7 +363,11 @@ impl FrameWriter {
         let particles = if self.options.particles {
             let path = format!("frames/particles_{index:04}.ply");
             let damage = driver.damage();
-            let fragment: Vec<f64> = pieces.piece_of_tet.iter().map(|&p| p as f64).collect();
+            let fragment: Vec<f64> = pieces
+                .piece_of_tet
+                .iter()
+                .map(|&p| f64::from(ids[p as usize]))
+                .collect();
             write_ply_points(
                 &self.dir.join(&path),
                 driver.solver().positions(),
@@ -405,6 +435,7 @@ impl FrameWriter {
             }),
         };
         self.manifest.frames.push(frame);
+        self.manifest.fragments = driver.fragment_births().to_vec();
         self.manifest.finished = last;
         self.write_manifest()?;
         driver.add_output_time(started.elapsed());
@@ -469,6 +500,19 @@ fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
         let p = dir.join(name);
         if p.is_dir() {
             std::fs::remove_dir_all(&p).map_err(|e| err(format!("cannot clear {name}/: {e}")))?;
+        }
+    }
+    // The USD cache an earlier run wrote under its scene's name (`[output] usd`).
+    if let Ok(text) = std::fs::read_to_string(dir.join("run.json")) {
+        let scene = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|m| m["scene"].as_str().map(str::to_owned));
+        if let Some(stem) = scene.as_deref().and_then(|s| Path::new(s).file_stem()) {
+            let p = dir.join(format!("{}.usda", stem.to_string_lossy()));
+            if p.is_file() {
+                std::fs::remove_file(&p)
+                    .map_err(|e| err(format!("cannot remove {}: {e}", p.display())))?;
+            }
         }
     }
     for name in ["run.json", "scene.toml", crate::checkpoint::CHECKPOINT_FILE] {

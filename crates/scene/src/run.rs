@@ -81,6 +81,8 @@ pub struct Summary {
     /// Self contact, when the scene has it: pair-list builds, and the most pairs in contact
     /// in a step with the deepest overlap (m, and as a share of the contact distance).
     pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
+    /// The USD cache, when the scene asked for one, and the wall time it took to write.
+    pub usd: Option<(crate::usd::UsdReport, std::time::Duration)>,
 }
 
 /// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
@@ -212,6 +214,20 @@ fn drive(
             }
         }
     }
+    let usd = match output.usd {
+        Some(layout) => {
+            let t = Instant::now();
+            match crate::usd::export_usd(dir, None, layout, None) {
+                Ok(report) => {
+                    let took = t.elapsed();
+                    driver.add_output_time(took);
+                    Some((report, took))
+                }
+                Err(e) => return stop(&mut writer, e),
+            }
+        }
+        None => None,
+    };
     // finished: a checkpoint left from before would only resume what is done
     let _ = std::fs::remove_file(dir.join(CHECKPOINT_FILE));
     let last = writer
@@ -236,6 +252,7 @@ fn drive(
             .self_contact()
             .map(|c| (c.rebuilds(), driver.self_contact_deepest())),
         integrator: driver.solver().integrator_name(),
+        usd,
     })
 }
 

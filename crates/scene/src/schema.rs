@@ -294,4 +294,12 @@ pub struct OutputSpec {
     /// run is interrupted; unset: after the first frame that ends five minutes or more of
     /// wall time after the last checkpoint.
     pub checkpoint_every: Option<usize>,
+    /// Also write the run as one USD cache, `NAME.usda` (default false).
+    pub usd: Option<bool>,
+    /// Lay the USD cache out as one prim per fragment, pivoted at its centre of mass (default
+    /// false: one mesh).
+    pub usd_pieces: Option<bool>,
+    /// Playback frames per second of the USD cache (default 24): the simulated time between
+    /// two frames plays in one frame.
+    pub fps: Option<f64>,
 }

@@ -267,8 +267,27 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
     if f.output.frames == Some(0) {
         return Err(ctx.err("output.frames", "must be at least 1"));
     }
+    if let Some(fps) = f.output.fps {
+        ctx.positive("output.fps", fps, "")?;
+        if fps > MAX_FPS {
+            return Err(ctx.err(
+                "output.fps",
+                format!("{fps} frames per second is more than {MAX_FPS}"),
+            ));
+        }
+    }
+    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
+        return Err(ctx.err(
+            "output.usd_pieces",
+            "lays out the USD cache, which is written only with usd = true",
+        ));
+    }
     Ok(())
 }
+
+/// The highest playback rate a scene may ask for (frames per second): far above any film or
+/// game rate, low enough that a frame is never shorter than a millisecond.
+pub const MAX_FPS: f64 = 1000.0;
 
 /// A collider's contact coefficients with the defaults filled in: `(stiffness factor, damping
 /// ratio, friction)`, all dimensionless.

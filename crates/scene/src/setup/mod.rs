@@ -3,6 +3,7 @@
 //! time step. Nothing is written to disk here.
 
 mod check;
+pub use check::MAX_FPS;
 mod colliders;
 mod loads;
 mod material;
@@ -64,7 +65,7 @@ pub mod defaults {
 }
 
 /// What the run writes besides the surface PLY.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OutputOptions {
     /// POV-Ray `mesh2` includes.
     pub povray: bool,
@@ -72,6 +73,10 @@ pub struct OutputOptions {
     pub particles: bool,
     /// When to write checkpoints at frame boundaries.
     pub checkpoints: CheckpointPolicy,
+    /// Write the run as a USD cache at its end, in this layout.
+    pub usd: Option<crate::usd::UsdLayout>,
+    /// Playback frames per second of caches.
+    pub fps: f64,
 }
 
 /// When a run writes a checkpoint at a frame boundary (an interrupted run always writes one).
@@ -397,5 +402,11 @@ fn output_options(f: &SceneFile) -> OutputOptions {
             Some(0) => CheckpointPolicy::OnInterrupt,
             Some(n) => CheckpointPolicy::EveryFrames(n),
         },
+        usd: (f.output.usd == Some(true)).then_some(if f.output.usd_pieces == Some(true) {
+            crate::usd::UsdLayout::Pieces
+        } else {
+            crate::usd::UsdLayout::Mesh
+        }),
+        fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
     }
 }
