@@ -10,7 +10,7 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-use common::{fails, ok, repo, tiny_wall};
+use common::{fails, ok, tiny_wall};
 use perifrac_io::read_ply_frame;
 
 fn s(p: &Path) -> &str {
@@ -42,21 +42,11 @@ fn run_with_usd(dir: &Path, frames: &str) -> std::path::PathBuf {
 }
 
 fn check(out: &Path, cache: &Path, pieces: bool) -> String {
-    let mut cmd = Command::new("python3");
-    cmd.arg(repo().join("tests/python/check_usd.py"))
-        .arg(out)
-        .arg(cache);
+    let mut args = vec![out.as_os_str(), cache.as_os_str()];
     if pieces {
-        cmd.arg("--pieces");
+        args.push("--pieces".as_ref());
     }
-    let res = cmd.output().unwrap();
-    let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
-    assert!(
-        res.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
-    stdout
+    common::python_script("check_usd.py", &args)
 }
 
 #[test]
@@ -127,18 +117,8 @@ fn blender_5_imports_the_cache_with_its_crack_attribute() {
     }
     let tmp = tempfile::tempdir().unwrap();
     let out = run_with_usd(tmp.path(), "3");
-    let res = Command::new("python3")
-        .arg(repo().join("tests/python/blender_usd.py"))
-        .arg(out.join("tiny_wall.usda"))
-        .arg("4")
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&res.stdout);
-    assert!(
-        res.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&res.stderr)
-    );
+    let cache = out.join("tiny_wall.usda");
+    let stdout = common::python_script("blender_usd.py", &[cache.as_os_str(), "4".as_ref()]);
     assert!(stdout.contains("modifiers MESH_SEQUENCE_CACHE"), "{stdout}");
     let run: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();

@@ -102,3 +102,19 @@ pub fn files(dir: &Path) -> std::collections::BTreeMap<PathBuf, Vec<u8>> {
     }
     out
 }
+
+/// Runs `python3 tests/python/SCRIPT ARGS...`, asserting it succeeds; returns its stdout.
+pub fn python_script(script: &str, args: &[&std::ffi::OsStr]) -> String {
+    let res = Command::new("python3")
+        .arg(repo().join("tests/python").join(script))
+        .args(args)
+        .output()
+        .expect("python3 runs");
+    let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
+    assert!(
+        res.status.success(),
+        "{script} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&res.stderr)
+    );
+    stdout
+}

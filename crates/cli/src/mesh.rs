@@ -183,6 +183,13 @@ fn print_report(r: &MesherReport) {
             r.fragments.dropped_pieces, r.fragments.dropped_tets
         );
     }
+    if r.manifold.removed_tets + r.manifold.added_tets > 0 {
+        eprintln!(
+            "boundary made manifold where it pinched at a lattice vertex or edge: {} tets \
+             removed, {} added",
+            r.manifold.removed_tets, r.manifold.added_tets
+        );
+    }
     eprintln!(
         "lattice spacing {:.4e}; snapped {} of {} boundary vertices onto the surface \
          ({} part way, {} left for quality)",

@@ -48,8 +48,8 @@ pub struct SurfaceRef<'a> {
     pub velocities: Option<&'a [[f64; 3]]>,
     /// Per vertex texture coordinates; same length as `vertices`.
     pub uv: Option<&'a [[f64; 2]]>,
-    /// Per vertex id (the tet-mesh vertex a split shading vertex copies, so a reader can weld
-    /// the copies); same length as `vertices`.
+    /// Per vertex id (the welded vertex a split shading vertex copies, so a reader can weld
+    /// the copies back); same length as `vertices`.
     pub vertex_ids: Option<&'a [u32]>,
     /// Per face fragment id; same length as `faces`.
     pub fragment: Option<&'a [u32]>,

@@ -55,7 +55,7 @@ fn header<W: Write>(w: &mut W, s: &SurfaceRef, encoding: PlyEncoding) -> io::Res
     if s.vertex_ids.is_some() {
         writeln!(
             w,
-            "comment vertex_id: the mesh vertex this one copies (equal ids: weld them)"
+            "comment vertex_id: the welded vertex this one copies (equal ids: weld them)"
         )?;
     }
     writeln!(w, "element vertex {}", s.vertices.len())?;

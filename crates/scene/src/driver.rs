@@ -254,6 +254,24 @@ impl Driver {
         self.fragments.update(pieces, frame)
     }
 
+    /// Places the mesh's vertices for a frame from the particles, with `pieces` the mesh's
+    /// current pieces: every vertex where the affine fit of the particles around it takes its
+    /// rest position ([`TetMesh::place_vertices_from_particles`]: exact for rigid motion and
+    /// uniform strain, no drift, whatever the step), then every piece of at most
+    /// [`perifrac_topology::RIGID_PIECE_TETS`] tets back into its rest shape, turned and moved
+    /// as its vertices say ([`TetMesh::place_small_pieces_rigidly`]): too few particles to fit.
+    /// Surface only: the particles are untouched. Returns the vertices fitted and the pieces
+    /// placed.
+    pub fn place_surface(&mut self, pieces: &Pieces) -> (usize, usize) {
+        let fitted = self
+            .mesh
+            .place_vertices_from_particles(self.solver.positions());
+        let rigid = self
+            .mesh
+            .place_small_pieces_rigidly(pieces, perifrac_topology::RIGID_PIECE_TETS);
+        (fitted, rigid)
+    }
+
     /// Every fragment so far with its parent and first frame, in id order.
     pub fn fragment_births(&self) -> &[FragmentBirth] {
         self.fragments.births()

@@ -2,7 +2,8 @@
 //! atomically after every frame and when the run stops, see [`RunManifest`]), `scene.toml` (the
 //! scene as run) and `frames/` with `surface_NNNN.ply` (binary PLY: vertices split where
 //! the surface shades sharp, along crack edges and corners, with normals `nx ny nz`, velocities
-//! `vx vy vz` (m/s), texture coordinates `s t` and the mesh `vertex_id` they copy; faces with
+//! `vx vy vz` (m/s), texture coordinates `s t` and the `vertex_id` of the surface vertex they
+//! copy, so that welding by it gives every piece's closed 2-manifold surface; faces with
 //! their `crack` flag and stable `fragment` id, see [`crate::fragments`]), optionally
 //! `surface_NNNN.inc` (POV-Ray `mesh2` with normals, declaring [`POVRAY_MESH_NAME`]) and
 //! `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`). Every file is written to a temporary name and renamed into place, so a reader
@@ -325,16 +326,16 @@ impl FrameWriter {
         last: bool,
     ) -> Result<&FrameJson, SceneError> {
         let started = Instant::now();
-        let (surface, pieces) = driver.mesh().surface_and_pieces();
+        let pieces = driver.mesh().pieces();
+        driver.place_surface(&pieces);
         let ids = driver.fragment_ids(&pieces, index);
         let mesh = driver.mesh();
+        let surface = mesh.surface_of(&pieces);
         let velocities = mesh.vertex_velocities(driver.masses(), driver.solver().velocities());
         let shaded = mesh.shade(&surface, &velocities, &mesh.shading_options());
-        let vertex_ids: Vec<u32> = shaded
-            .source
-            .iter()
-            .map(|&k| surface.vertex_ids[k as usize])
-            .collect();
+        // The surface vertex each shading copy belongs to: welding by it gives every piece's
+        // closed 2-manifold surface.
+        let vertex_ids = &shaded.source;
         let face_fragment: Vec<u32> = shaded.piece.iter().map(|&p| ids[p as usize]).collect();
         let name = format!("surface_{index:04}");
         let view = SurfaceRef {
@@ -344,7 +345,7 @@ impl FrameWriter {
             normals: Some(&shaded.normals),
             velocities: Some(&shaded.velocities),
             uv: Some(&shaded.uv),
-            vertex_ids: Some(&vertex_ids),
+            vertex_ids: Some(vertex_ids),
             fragment: Some(&face_fragment),
             colors: None,
         };
@@ -585,6 +586,7 @@ mod tests {
             faces: vec![[0, 1, 2], [3, 4, 5]],
             crack: vec![0, 1],
             piece: vec![0, 1],
+            midpoints: Vec::new(),
         };
         let b = main_bounds(&surface, &[99.0, 1.0]);
         assert_eq!(

@@ -92,16 +92,24 @@ impl TetMesh {
             self.pos.len(),
             "one velocity per mesh vertex"
         );
-        let rest: Vec<[f64; 3]> = surface
+        let mut rest: Vec<[f64; 3]> = surface
             .vertex_ids
             .iter()
             .map(|&v| self.rest[self.origin[v as usize] as usize])
             .collect();
-        let velocities: Vec<[f64; 3]> = surface
+        let mut velocities: Vec<[f64; 3]> = surface
             .vertex_ids
             .iter()
             .map(|&v| vertex_velocities[v as usize])
             .collect();
+        // A vertex added at an edge's middle takes the mean of the ends.
+        for &(m, a, b) in &surface.midpoints {
+            let mean = |x: &[[f64; 3]]| -> [f64; 3] {
+                std::array::from_fn(|k| 0.5 * (x[a as usize][k] + x[b as usize][k]))
+            };
+            rest[m as usize] = mean(&rest);
+            velocities[m as usize] = mean(&velocities);
+        }
         surface.shade(&rest, &velocities, options)
     }
 }
@@ -395,6 +403,7 @@ mod tests {
             faces: vec![[0, 1, 2]],
             crack: vec![0],
             piece: vec![0],
+            midpoints: Vec::new(),
         };
         let shaded = s.shade(&s.vertices, &still(&s), &options());
         assert!(shaded.normals.iter().flatten().all(|x| x.is_finite()));

@@ -4,6 +4,7 @@ use thiserror::Error;
 
 use super::fragments::{drop_small_fragments, FragmentReport};
 use super::lattice::BccLattice;
+use super::manifold::{make_boundary_manifold, ManifoldReport};
 use super::snap::{snap_to_surface, SnapReport};
 use super::surface_check::{capped_volume, check_surface, SurfaceProblems};
 use super::winding::Winding;
@@ -45,6 +46,8 @@ pub struct MesherReport {
     pub edge_length: f64,
     /// Loose fragments dropped after clipping.
     pub fragments: FragmentReport,
+    /// Tets removed where the clipped boundary pinched at a lattice vertex or edge.
+    pub manifold: ManifoldReport,
     /// What snapping did.
     pub snap: SnapReport,
     /// Number of tets.
@@ -180,7 +183,9 @@ pub fn mesh_surface(
         .map(|p| winding.inside(lattice.point(p)))
         .collect();
     let mut tets = Vec::new();
+    let mut all = Vec::new();
     lattice.for_each_tet(|t| {
+        all.push(t);
         let n = t.iter().filter(|&&v| inside[v as usize]).count();
         let keep = match n {
             0 => false,
@@ -195,7 +200,15 @@ pub fn mesh_surface(
             tets.push(t);
         }
     });
-    let fragments = drop_small_fragments(&mut tets);
+    let mut fragments = drop_small_fragments(&mut tets);
+    let manifold = make_boundary_manifold(&mut tets, &all);
+    drop(all);
+    if manifold.removed_tets > 0 {
+        // Removing tets at a pinch can leave a loose bit behind.
+        let again = drop_small_fragments(&mut tets);
+        fragments.dropped_pieces += again.dropped_pieces;
+        fragments.dropped_tets += again.dropped_tets;
+    }
     // Compact the used lattice points and orient every tet positively.
     let mut new_index = vec![u32::MAX; points];
     let mut out_vertices = Vec::new();
@@ -236,6 +249,7 @@ pub fn mesh_surface(
         mesh_volume,
         edge_length: h,
         fragments,
+        manifold,
         snap,
         tets: tets.len(),
         min_dihedral_deg: min_d,

@@ -9,6 +9,7 @@
 mod bvh;
 pub mod fragments;
 pub mod lattice;
+pub mod manifold;
 mod mesh_surface;
 pub mod shapes;
 pub mod snap;
@@ -16,6 +17,7 @@ pub mod surface_check;
 pub mod winding;
 
 pub use fragments::FragmentReport;
+pub use manifold::ManifoldReport;
 pub use mesh_surface::{
     estimated_tets, mesh_surface, MesherError, MesherOptions, MesherOutput, MesherReport,
     DEFAULT_TARGET_TETS,

@@ -211,7 +211,7 @@ pub fn check_invariants(m: &TetMesh, rest_volume: f64) {
     check_surfaces(m);
 }
 
-/// Every piece surface is closed and encloses the piece's tet volume, positively.
+/// Every piece surface is a closed 2-manifold and encloses the piece's tet volume, positively.
 pub fn check_surfaces(m: &TetMesh) {
     let pieces = m.pieces();
     let mut volume = vec![0.0; pieces.count];
@@ -223,6 +223,10 @@ pub fn check_surfaces(m: &TetMesh) {
     let mut total_faces = 0;
     for (p, s) in surfaces.iter().enumerate() {
         assert!(s.is_closed(), "surface of piece {p} is not closed");
+        assert!(
+            s.is_closed_manifold(),
+            "surface of piece {p} is not a closed 2-manifold"
+        );
         assert!(s.piece.iter().all(|&q| q as usize == p));
         let sv = s.signed_volume();
         assert!(sv > 0.0, "piece {p} surface is inward ({sv})");
@@ -239,4 +243,5 @@ pub fn check_surfaces(m: &TetMesh) {
     let all = m.surface();
     assert_eq!(all.faces.len(), total_faces);
     assert!(all.is_closed());
+    assert!(all.is_closed_manifold());
 }
