@@ -4,7 +4,8 @@
 //! finite elements, shown converged) over resolution and horizon sweeps and reports each run's
 //! wall time, steps, bonds and error; [`stability`] runs hard cases and says whether each
 //! survived, stopped with a message or failed; [`speed`] times the force loop; [`contact`]
-//! measures contact between particles. Results come as
+//! measures contact between particles; [`look`] measures the cut surface (roughness, crack
+//! directions, fragment sizes, validity). Results come as
 //! [`Table`]s (Markdown) and [`Plot`]s (PNG through plotters). This crate is a harness: it uses
 //! the physics, fem, topology and scene crates and is used only by the command line.
 
@@ -12,15 +13,18 @@
 
 pub mod accuracy;
 mod bar;
+mod bars;
 pub mod contact;
 mod error;
 pub mod events;
 mod fit;
+pub mod look;
 mod plot;
 pub mod speed;
 pub mod stability;
 mod table;
 
+pub use bars::Bars;
 pub use error::BenchError;
 pub use plot::{Plot, Series, FONT_PATHS};
 pub use table::Table;

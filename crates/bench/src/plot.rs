@@ -20,7 +20,7 @@ pub const FONT_PATHS: &[&str] = &[
 ];
 
 /// Curve colours: distinct on white, none pale.
-const COLORS: [RGBColor; 8] = [
+pub(crate) const COLORS: [RGBColor; 8] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -64,7 +64,7 @@ pub struct Plot {
     pub series: Vec<Series>,
 }
 
-fn font() -> Result<(), String> {
+pub(crate) fn font() -> Result<(), String> {
     static LOADED: OnceLock<Result<(), String>> = OnceLock::new();
     LOADED
         .get_or_init(|| {
@@ -83,17 +83,26 @@ fn font() -> Result<(), String> {
         .clone()
 }
 
+/// Draws a PNG with `draw` into a temporary name beside `path` and renames it into place, so
+/// a reader never sees half a picture.
+pub(crate) fn write_png_atomically(
+    path: &Path,
+    draw: impl FnOnce(&Path) -> Result<(), BenchError>,
+) -> Result<(), BenchError> {
+    let tmp = path.with_extension("tmp.png");
+    draw(&tmp)?;
+    std::fs::rename(&tmp, path).map_err(|e| BenchError::Plot {
+        file: path.display().to_string(),
+        message: e.to_string(),
+    })
+}
+
 impl Plot {
     /// Draws the plot into `path` (PNG, 900 x 600 pixels), both axes logarithmic over the
     /// points' range; written to a temporary name beside it and renamed into place. Points that
     /// are not finite and positive are left out.
     pub fn write_png(&self, path: &Path) -> Result<(), BenchError> {
-        let tmp = path.with_extension("tmp.png");
-        self.draw(&tmp)?;
-        std::fs::rename(&tmp, path).map_err(|e| BenchError::Plot {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })
+        write_png_atomically(path, |tmp| self.draw(tmp))
     }
 
     fn draw(&self, path: &Path) -> Result<(), BenchError> {

@@ -227,3 +227,34 @@ fn contact_tables_measure_without_changing_the_run() {
     assert_eq!(pile.rows[1][7], "1");
     assert_eq!(pile.rows[1][9], "0");
 }
+
+#[test]
+fn look_tables_hold_every_case_with_sound_pieces() {
+    let split = perifrac_bench::look::split(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(split.rows.len(), 2);
+    let (directions, bars) =
+        perifrac_bench::look::wall_directions(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(directions.rows.len(), perifrac_bench::look::DIRECTION_BINS);
+    // The shares over the bins add up to the whole crack area.
+    let total: f64 = directions
+        .rows
+        .iter()
+        .map(|r| r[1].trim_end_matches('%').parse::<f64>().unwrap())
+        .sum();
+    assert!(
+        (total - 100.0).abs() < 0.1 * perifrac_bench::look::DIRECTION_BINS as f64,
+        "{total}"
+    );
+    assert_eq!(bars.series[0].1.len(), perifrac_bench::look::DIRECTION_BINS);
+    let (sizes, _) = perifrac_bench::look::fragment_sizes(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(sizes.rows.len(), 2);
+    // Every piece of every run is a closed 2-manifold, right side out.
+    for row in split.rows.iter().chain(&sizes.rows) {
+        let n = row.len();
+        assert_eq!(
+            (row[n - 2].as_str(), row[n - 1].as_str()),
+            ("0", "0"),
+            "{row:?}"
+        );
+    }
+}

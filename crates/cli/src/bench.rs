@@ -1,4 +1,4 @@
-//! `perifrac bench accuracy | stability | events | contact | speed`: run the benchmark harness and write its
+//! `perifrac bench accuracy | stability | events | contact | speed | look`: run the benchmark harness and write its
 //! Markdown report and PNG plots into a directory.
 
 use std::io::Write as _;
@@ -40,6 +40,9 @@ pub enum Which {
     /// Bond-update rates per material path, seconds per step at the paper's wall size, the
     /// topology's share of a step during heavy fracture, memory per bond, the implicit step.
     Speed(Common),
+    /// The cut surface: a split bar's crack roughness, the default wall's crack directions and
+    /// fragment sizes at three resolutions, every piece checked closed and right side out.
+    Look(Common),
 }
 
 /// Options every benchmark takes.
@@ -61,6 +64,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Which::Speed(c) => speed_report(c),
         Which::Events(c) => events_report(c),
         Which::Contact(c) => contact_report(c),
+        Which::Look(c) => look_report(c),
     }
 }
 
@@ -181,6 +185,35 @@ fn contact_report(c: &Common) -> Result<()> {
     );
     md.push_str(&pile.to_markdown());
     report.write("contact", &md)?;
+    Ok(())
+}
+
+fn look_report(c: &Common) -> Result<()> {
+    let report = Report::start(c)?;
+    let mut progress = report.progress();
+    let e = effort(c);
+    let split = perifrac_bench::look::split(e, &mut progress)?;
+    let (directions, direction_bars) = perifrac_bench::look::wall_directions(e, &mut progress)?;
+    let (sizes, size_bars) = perifrac_bench::look::fragment_sizes(e, &mut progress)?;
+    let mut md = report.header("look");
+    md.push_str("## A bar pulled apart: the crack's roughness\n\n");
+    md.push_str(&split.to_markdown());
+    md.push_str("\n## The default wall: directions of its cracks in the slab's plane\n\n");
+    md.push_str(&directions.to_markdown());
+    for (bars, png, what) in [
+        (&direction_bars, "look_directions.png", "crack directions"),
+        (&size_bars, "look_fragments.png", "fragment sizes"),
+    ] {
+        if png == "look_fragments.png" {
+            md.push_str("\n## The default wall at three resolutions: its fragments\n\n");
+            md.push_str(&sizes.to_markdown());
+        }
+        match bars.write_png(&c.output.join(png)) {
+            Ok(()) => md.push_str(&format!("\n![{what}]({png})\n")),
+            Err(e) => eprintln!("note: {e}; the table is written without its chart"),
+        }
+    }
+    report.write("look", &md)?;
     Ok(())
 }
 

@@ -1,0 +1,421 @@
+//! `perifrac bench look`: what the cut surface looks like, measured (issue 13). A bar of the
+//! default glass pulled apart (a mode-I split) gives the crack's roughness: its area over the
+//! ideal plane's and how far its faces' normals lean from the plane's; the default wall gives
+//! the directions cracks run in the slab's plane (a lattice shows peaks at its few directions)
+//! and the sizes of its fragments at three resolutions; and every piece of every run is checked
+//! closed, 2-manifold and of positive volume at its last step.
+
+use std::path::Path;
+
+use perifrac_io::{write_tet_mesh, TetFormat, TetMeshData};
+use perifrac_scene::{Scene, Setup};
+use perifrac_topology::{primitives::box_data, Pieces, Surface};
+
+use crate::bars::Bars;
+use crate::table::Table;
+use crate::{BenchError, Effort};
+
+/// The default scene, whose cells the fragment runs change.
+const WALL: &str = include_str!("../../../data/scenes/wall.toml");
+
+/// Bins of the in-plane crack-direction histogram over 180 degrees (the issue's 12: 15 degrees
+/// each).
+pub const DIRECTION_BINS: usize = 12;
+
+fn scene_error(case: &str, e: &dyn std::fmt::Display) -> BenchError {
+    BenchError::Scene {
+        case: case.into(),
+        message: e.to_string(),
+    }
+}
+
+/// Steps `setup` to its end and returns the surface a frame would write then (vertices
+/// placed from the particles, small pieces rigidly) with the pieces.
+fn run_to_end(
+    case: &str,
+    setup: &mut Setup,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Surface, Pieces), BenchError> {
+    progress(&format!("look: {case}"));
+    let steps = setup.frames as u64 * setup.steps_per_frame;
+    for _ in 0..steps {
+        setup.driver.step().map_err(|cause| BenchError::Physics {
+            case: case.into(),
+            cause,
+        })?;
+    }
+    let pieces = setup.driver.mesh().pieces();
+    setup.driver.place_surface(&pieces);
+    let surface = setup.driver.mesh().surface_of(&pieces);
+    Ok((surface, pieces))
+}
+
+/// Area (length^2) and unit normal of face `f`.
+fn area_normal(s: &Surface, f: usize) -> (f64, [f64; 3]) {
+    let [a, b, c] = s.faces[f].map(|k| s.vertices[k as usize]);
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    let n = [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ];
+    let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if l > 0.0 {
+        (0.5 * l, n.map(|c| c / l))
+    } else {
+        (0.0, [0.0; 3])
+    }
+}
+
+/// The area-weighted `q` quantile of `values` (`(value, weight)`).
+fn weighted_quantile(values: &mut [(f64, f64)], q: f64) -> f64 {
+    values.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = values.iter().map(|v| v.1).sum();
+    let mut acc = 0.0;
+    for &(v, w) in values.iter() {
+        acc += w;
+        if acc >= q * total {
+            return v;
+        }
+    }
+    values.last().map_or(0.0, |v| v.0)
+}
+
+/// Every piece of `s` checked: (pieces, not a closed 2-manifold, not of positive volume).
+fn validity(s: &Surface, pieces: usize) -> (usize, usize, usize) {
+    let mut by = vec![Surface::default(); pieces];
+    for (f, &p) in s.piece.iter().enumerate() {
+        by[p as usize].faces.push(s.faces[f]);
+    }
+    let (mut open, mut inside_out, mut count) = (0, 0, 0);
+    for mut piece in by {
+        if piece.faces.is_empty() {
+            continue;
+        }
+        count += 1;
+        piece.vertices.clone_from(&s.vertices);
+        if !piece.is_closed_manifold() {
+            open += 1;
+        } else if piece.signed_volume() <= 0.0 {
+            inside_out += 1;
+        }
+    }
+    (count, open, inside_out)
+}
+
+/// A bar of `cells` Kuhn cells, `length` x `width` x `width` m, its axis turned by `angle`
+/// (rad) from the lattice's x about z: written as a Medit mesh beside the scene, with the scene
+/// text that pulls its two ends apart along its axis at 0.1 m/s each, a notch half its depth
+/// deep across its middle to start the crack there.
+fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, BenchError> {
+    // Slow ends (0.1 m/s) and a deep notch (half the depth) give one crack across the notch
+    // rather than a shattered bar: at 1 m/s and a quarter-depth notch the bar came apart in
+    // dozens of pieces at 24 x 4 x 4 cells, and roughness then measures debris, not the crack.
+    let (speed, duration, notch) = (0.1, 0.0015, 0.5);
+    let (length, width) = (0.3, 0.05);
+    let (mut vertices, tets) = box_data([0.0; 3], [length, width, width], cells);
+    let (s, c) = angle.sin_cos();
+    // Turned about the bar's centre, then moved to positive coordinates.
+    let centre = [0.5 * length, 0.5 * width, 0.5 * width];
+    let shift = [0.3, 0.3, 0.0];
+    for v in &mut vertices {
+        let (x, y) = (v[0] - centre[0], v[1] - centre[1]);
+        *v = [c * x - s * y + shift[0], s * x + c * y + shift[1], v[2]];
+    }
+    let mesh = TetMeshData {
+        tet_labels: vec![0; tets.len()],
+        vertices,
+        tets,
+        ..TetMeshData::default()
+    };
+    let path = dir.join(format!("bar_{:.0}.mesh", angle.to_degrees()));
+    write_tet_mesh(&path, &mesh, TetFormat::Medit).map_err(|e| scene_error("split", &e))?;
+    let axis = [c, s, 0.0];
+    let end = |sign: f64| [0, 1].map(|k| shift[k] + sign * 0.5 * length * axis[k]);
+    let (left, right) = (end(-1.0), end(1.0));
+    // End caps: the particles within 2 cm of each end's centre line.
+    let cap = |p: [f64; 2]| {
+        format!(
+            "{{ min = [{}, {}, -1.0], max = [{}, {}, 1.0] }}",
+            p[0] - 0.02,
+            p[1] - 0.02,
+            p[0] + 0.02,
+            p[1] + 0.02
+        )
+    };
+    Ok(format!(
+        "[mesh]\nfile = \"{}\"\n\n\
+         [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
+         s_crit = 0.0005\n\n[simulation]\nduration = {duration}\n\n\
+         [[anchor]]\nregion = {}\nvelocity = [{}, {}, 0.0]\n\n\
+         [[anchor]]\nregion = {}\nvelocity = [{}, {}, 0.0]\n\n\
+         [[precrack]]\npoint = [{}, {}, 0.0]\nnormal = [{c}, {s}, 0.0]\n\
+         region = {{ min = [{}, {}, -1.0], max = [{}, {}, {}] }}\n\n[output]\nframes = 1\n",
+        path.display(),
+        cap(left),
+        -speed * axis[0],
+        -speed * axis[1],
+        cap(right),
+        speed * axis[0],
+        speed * axis[1],
+        shift[0],
+        shift[1],
+        shift[0] - 0.05,
+        shift[1] - 0.05,
+        shift[0] + 0.05,
+        shift[1] + 0.05,
+        notch * width,
+    ))
+}
+
+/// The mode-I split of a bar along the lattice and at 30 degrees to it: crack area over the
+/// bar's section, and how far the crack faces' normals lean from the bar's axis (area-weighted
+/// mean and 90th percentile), with the pieces' validity.
+pub fn split(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let cells = match effort {
+        Effort::Tiny => [12, 2, 2],
+        Effort::Full => [48, 8, 8],
+    };
+    let dir = tempfile_dir()?;
+    let mut t = Table::new(&[
+        "bar axis to the lattice",
+        "particles",
+        "pieces",
+        "crack area / section",
+        "normal deviation, mean (deg)",
+        "normal deviation, 90th percentile (deg)",
+        "pieces not closed 2-manifolds",
+        "pieces inside out",
+    ]);
+    for degrees in [0.0f64, 30.0] {
+        let case = format!("split at {degrees} degrees");
+        let text = split_scene(dir.path(), degrees.to_radians(), cells)?;
+        let scene = Scene::parse(&text, &dir.path().join("split.toml"))
+            .map_err(|e| scene_error(&case, &e))?;
+        let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
+        let particles = setup.info.particles;
+        let (s, pieces) = run_to_end(&case, &mut setup, progress)?;
+        // The left end's piece: the one holding the particle nearest the left end.
+        let y = setup.driver.solver().positions();
+        let axis = [degrees.to_radians().cos(), degrees.to_radians().sin(), 0.0];
+        let along = |p: &[f64; 3]| p[0] * axis[0] + p[1] * axis[1];
+        let left = (0..y.len())
+            .min_by(|&a, &b| along(&y[a]).total_cmp(&along(&y[b])))
+            .map_or(0, |i| pieces.piece_of_tet[i]);
+        let mut area = 0.0;
+        let mut angles = Vec::new();
+        for f in 0..s.faces.len() {
+            if s.crack[f] == 0 || s.piece[f] != left {
+                continue;
+            }
+            let (a, n) = area_normal(&s, f);
+            let cos = (n[0] * axis[0] + n[1] * axis[1] + n[2] * axis[2]).abs();
+            area += a;
+            angles.push((cos.min(1.0).acos().to_degrees(), a));
+        }
+        let mean = angles.iter().map(|(d, a)| d * a).sum::<f64>() / area.max(f64::MIN_POSITIVE);
+        let p90 = weighted_quantile(&mut angles, 0.9);
+        let (count, open, inside_out) = validity(&s, pieces.count);
+        t.push(vec![
+            format!("{degrees:.0} degrees"),
+            particles.to_string(),
+            count.to_string(),
+            format!("{:.3}", area / (0.05 * 0.05)),
+            format!("{mean:.1}"),
+            format!("{p90:.1}"),
+            open.to_string(),
+            inside_out.to_string(),
+        ]);
+    }
+    Ok(t)
+}
+
+/// A temporary directory for generated meshes.
+fn tempfile_dir() -> Result<TempDir, BenchError> {
+    let base = std::env::temp_dir().join(format!("perifrac-look-{}", std::process::id()));
+    std::fs::create_dir_all(&base).map_err(|e| BenchError::Scene {
+        case: "look".into(),
+        message: format!("cannot create {}: {e}", base.display()),
+    })?;
+    Ok(TempDir(base))
+}
+
+/// A directory removed when dropped.
+struct TempDir(std::path::PathBuf);
+
+impl TempDir {
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        // Best effort: a leftover temporary directory harms nothing.
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The default wall at the end of its run: the in-plane directions of its crack faces'
+/// normals as an area-weighted histogram of [`DIRECTION_BINS`] bins over 180 degrees (each
+/// face weighted by its area times the in-plane part of its normal), as shares of the total.
+pub fn wall_directions(
+    effort: Effort,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Table, Bars), BenchError> {
+    let cells = match effort {
+        Effort::Tiny => "cells = [8, 8, 1]",
+        Effort::Full => "cells = [24, 24, 3]",
+    };
+    let text = WALL.replace("cells = [24, 24, 3]", cells);
+    let case = "the default wall";
+    let scene = Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(case, &e))?;
+    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(case, &e))?;
+    let (s, _) = run_to_end(case, &mut setup, progress)?;
+    let hist = direction_histogram(&s);
+    let mean = 1.0 / DIRECTION_BINS as f64;
+    let mut t = Table::new(&[
+        "direction of the crack normal in the slab's plane (deg)",
+        "share of the crack area",
+        "share / mean",
+    ]);
+    let width = 180.0 / DIRECTION_BINS as f64;
+    for (k, &h) in hist.iter().enumerate() {
+        t.push(vec![
+            format!("{:.0}-{:.0}", k as f64 * width, (k + 1) as f64 * width),
+            format!("{:.1}%", 100.0 * h),
+            format!("{:.2}", h / mean),
+        ]);
+    }
+    let bars = Bars {
+        title: "Directions of crack normals in the default wall's plane".into(),
+        x_label: "direction from x (degrees)".into(),
+        y_label: "share of the crack area / mean".into(),
+        bins: (0..DIRECTION_BINS)
+            .map(|k| format!("{:.0}", (k as f64 + 0.5) * width))
+            .collect(),
+        series: vec![("today".into(), hist.iter().map(|h| h / mean).collect())],
+        line: Some(("target: 1.5 x the mean".into(), 1.5)),
+    };
+    Ok((t, bars))
+}
+
+/// The area-weighted histogram of the in-plane (x-y) directions of the crack faces' normals,
+/// [`DIRECTION_BINS`] bins over 180 degrees, as shares.
+pub fn direction_histogram(s: &Surface) -> Vec<f64> {
+    let mut hist = vec![0.0; DIRECTION_BINS];
+    for f in 0..s.faces.len() {
+        if s.crack[f] == 0 {
+            continue;
+        }
+        let (a, n) = area_normal(s, f);
+        let inplane = n[0].hypot(n[1]);
+        if inplane <= 0.0 {
+            continue;
+        }
+        let theta = n[1].atan2(n[0]).rem_euclid(std::f64::consts::PI);
+        let k = ((theta / std::f64::consts::PI * DIRECTION_BINS as f64) as usize)
+            .min(DIRECTION_BINS - 1);
+        hist[k] += a * inplane;
+    }
+    let total: f64 = hist.iter().sum();
+    if total > 0.0 {
+        for h in &mut hist {
+            *h /= total;
+        }
+    }
+    hist
+}
+
+/// The default wall at three resolutions: fragments, the share that are single tets, tets
+/// per fragment (median, 90th percentile, largest), the largest fragment's share of the
+/// volume, and the pieces' validity; with the distribution of fragment sizes.
+pub fn fragment_sizes(
+    effort: Effort,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Table, Bars), BenchError> {
+    let runs: &[[usize; 3]] = match effort {
+        Effort::Tiny => &[[6, 6, 1], [8, 8, 1]],
+        Effort::Full => &[[16, 16, 2], [24, 24, 3], [32, 32, 4]],
+    };
+    let mut t = Table::new(&[
+        "wall cells",
+        "particles",
+        "fragments",
+        "single-tet fragments",
+        "tets per fragment: median / 90th percentile / largest",
+        "largest fragment's share of the volume",
+        "pieces not closed 2-manifolds",
+        "pieces inside out",
+    ]);
+    // Size classes of the distribution: 1, 2-3, 4-7, ... tets.
+    let classes = 12;
+    let mut series = Vec::new();
+    for cells in runs {
+        let case = format!("wall {}x{}x{}", cells[0], cells[1], cells[2]);
+        let text = WALL.replace("cells = [24, 24, 3]", &format!("cells = {cells:?}"));
+        let scene =
+            Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(&case, &e))?;
+        let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
+        let particles = setup.info.particles;
+        let (s, pieces) = run_to_end(&case, &mut setup, progress)?;
+        let mut tets = vec![0usize; pieces.count];
+        for &p in &pieces.piece_of_tet {
+            tets[p as usize] += 1;
+        }
+        let volumes = setup.driver.mesh().rest_volumes();
+        let mut volume = vec![0.0; pieces.count];
+        for (t, &p) in pieces.piece_of_tet.iter().enumerate() {
+            volume[p as usize] += volumes[t];
+        }
+        let total: f64 = volume.iter().sum();
+        let largest_share =
+            volume.iter().cloned().fold(0.0, f64::max) / total.max(f64::MIN_POSITIVE);
+        let mut sorted = tets.clone();
+        sorted.sort_unstable();
+        let q = |x: f64| sorted[((sorted.len() - 1) as f64 * x).round() as usize];
+        let single = tets.iter().filter(|&&n| n == 1).count();
+        let (_, open, inside_out) = validity(&s, pieces.count);
+        t.push(vec![
+            format!("{} x {} x {}", cells[0], cells[1], cells[2]),
+            particles.to_string(),
+            pieces.count.to_string(),
+            format!(
+                "{} ({:.0}%)",
+                single,
+                100.0 * single as f64 / pieces.count as f64
+            ),
+            format!(
+                "{} / {} / {}",
+                q(0.5),
+                q(0.9),
+                sorted.last().copied().unwrap_or(0)
+            ),
+            format!("{:.1}%", 100.0 * largest_share),
+            open.to_string(),
+            inside_out.to_string(),
+        ]);
+        let mut hist = vec![0.0; classes];
+        for &n in &tets {
+            let k = (usize::BITS - n.leading_zeros()) as usize - 1;
+            hist[k.min(classes - 1)] += 1.0;
+        }
+        let count = pieces.count as f64;
+        series.push((case, hist.iter().map(|h| h / count).collect()));
+    }
+    let bars = Bars {
+        title: "Fragment sizes of the default wall at three resolutions".into(),
+        x_label: "tets per fragment".into(),
+        y_label: "share of the fragments".into(),
+        bins: (0..classes)
+            .map(|k| match k {
+                0 => "1".into(),
+                _ => format!("{}-{}", 1usize << k, (1usize << (k + 1)) - 1),
+            })
+            .collect(),
+        series,
+        line: None,
+    };
+    Ok((t, bars))
+}
