@@ -362,3 +362,47 @@ fn every_piece_of_every_frame_passes_the_independent_check() {
         "{stdout}"
     );
 }
+
+/// Crack smoothing is output only: with it off the particles (positions, damage, fragments)
+/// of every frame are byte-identical, while the surfaces differ (it did something).
+#[test]
+fn crack_smoothing_leaves_the_physics_byte_identical() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tiny_wall(tmp.path());
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let off = tmp.path().join("tiny_wall_rough.toml");
+    let rough = text.replace("[output]\n", "[output]\nsmooth_cracks = false\n");
+    assert_ne!(
+        rough, text,
+        "wall.toml has no [output] table to add the key to"
+    );
+    std::fs::write(&off, rough).unwrap();
+    let (a, b) = (tmp.path().join("on"), tmp.path().join("off"));
+    ok(&["run", s(&scene), "-o", s(&a), "--frames", "6"]);
+    ok(&["run", s(&off), "-o", s(&b), "--frames", "6"]);
+    let mut surfaces_differ = false;
+    for k in 0..=6 {
+        let particles = format!("frames/particles_{k:04}.ply");
+        assert_eq!(
+            std::fs::read(a.join(&particles)).unwrap(),
+            std::fs::read(b.join(&particles)).unwrap(),
+            "{particles}"
+        );
+        let surface = format!("frames/surface_{k:04}.ply");
+        let (sa, sb) = (
+            read_ply_frame(&a.join(&surface)).unwrap(),
+            read_ply_frame(&b.join(&surface)).unwrap(),
+        );
+        // Same faces (welded through their vertex ids: shading splits vertices by angle, and
+        // angles move), flags and fragments: only positions and what follows from them move.
+        let welded = |f: &perifrac_io::FrameSurface| -> Vec<[u32; 3]> {
+            let ids = f.vertex_ids.as_ref().unwrap();
+            f.faces.iter().map(|t| t.map(|k| ids[k as usize])).collect()
+        };
+        assert_eq!(welded(&sa), welded(&sb));
+        assert_eq!(sa.crack, sb.crack);
+        assert_eq!(sa.fragment, sb.fragment);
+        surfaces_differ |= sa.vertices != sb.vertices;
+    }
+    assert!(surfaces_differ, "smoothing moved no vertex of any frame");
+}

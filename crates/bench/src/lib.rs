@@ -17,6 +17,7 @@ mod bars;
 pub mod contact;
 mod error;
 pub mod events;
+mod facets;
 mod fit;
 pub mod look;
 mod plot;
@@ -26,6 +27,7 @@ mod table;
 
 pub use bars::Bars;
 pub use error::BenchError;
+pub use facets::{Facets, Panel};
 pub use plot::{Plot, Series, FONT_PATHS};
 pub use table::Table;
 

@@ -9,9 +9,10 @@ use std::path::Path;
 
 use perifrac_io::{write_tet_mesh, TetFormat, TetMeshData};
 use perifrac_scene::{Scene, Setup};
-use perifrac_topology::{primitives::box_data, Pieces, Surface};
+use perifrac_topology::{primitives::box_data, CrackSmoothing, Pieces, Surface};
 
 use crate::bars::Bars;
+use crate::facets::{Facets, Panel};
 use crate::table::Table;
 use crate::{BenchError, Effort};
 
@@ -36,6 +37,19 @@ fn run_to_end(
     setup: &mut Setup,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Surface, Pieces), BenchError> {
+    step_to_end(case, setup, progress)?;
+    let pieces = setup.driver.mesh().pieces();
+    setup.driver.place_surface(&pieces);
+    let surface = setup.driver.mesh().surface_of(&pieces);
+    Ok((surface, pieces))
+}
+
+/// Steps `setup` to the end of its run.
+fn step_to_end(
+    case: &str,
+    setup: &mut Setup,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(), BenchError> {
     progress(&format!("look: {case}"));
     let steps = setup.frames as u64 * setup.steps_per_frame;
     for _ in 0..steps {
@@ -44,10 +58,7 @@ fn run_to_end(
             cause,
         })?;
     }
-    let pieces = setup.driver.mesh().pieces();
-    setup.driver.place_surface(&pieces);
-    let surface = setup.driver.mesh().surface_of(&pieces);
-    Ok((surface, pieces))
+    Ok(())
 }
 
 /// Area (length^2) and unit normal of face `f`.
@@ -82,6 +93,33 @@ fn weighted_quantile(values: &mut [(f64, f64)], q: f64) -> f64 {
     values.last().map_or(0.0, |v| v.0)
 }
 
+/// `s` with its cracks smoothed as frames are written ([`CrackSmoothing::default`]), and the
+/// seconds that took.
+fn smoothed(s: &Surface) -> (Surface, f64) {
+    let mut out = s.clone();
+    let started = std::time::Instant::now();
+    out.smooth_cracks(&CrackSmoothing::default());
+    (out, started.elapsed().as_secs_f64())
+}
+
+/// The crack faces of piece `piece` of `s`: their area (length^2), and how far their normals
+/// lean from `axis` (degrees, area-weighted mean and 90th percentile).
+fn roughness(s: &Surface, piece: u32, axis: [f64; 3]) -> (f64, f64, f64) {
+    let mut area = 0.0;
+    let mut angles = Vec::new();
+    for f in 0..s.faces.len() {
+        if s.crack[f] == 0 || s.piece[f] != piece {
+            continue;
+        }
+        let (a, n) = area_normal(s, f);
+        let cos = (n[0] * axis[0] + n[1] * axis[1] + n[2] * axis[2]).abs();
+        area += a;
+        angles.push((cos.min(1.0).acos().to_degrees(), a));
+    }
+    let mean = angles.iter().map(|(d, a)| d * a).sum::<f64>() / area.max(f64::MIN_POSITIVE);
+    (area, mean, weighted_quantile(&mut angles, 0.9))
+}
+
 /// Every piece of `s` checked: (pieces, not a closed 2-manifold, not of positive volume).
 fn validity(s: &Surface, pieces: usize) -> (usize, usize, usize) {
     let mut by = vec![Surface::default(); pieces];
@@ -104,25 +142,71 @@ fn validity(s: &Surface, pieces: usize) -> (usize, usize, usize) {
     (count, open, inside_out)
 }
 
-/// A bar of `cells` Kuhn cells, `length` x `width` x `width` m, its axis turned by `angle`
-/// (rad) from the lattice's x about z: written as a Medit mesh beside the scene, with the scene
-/// text that pulls its two ends apart along its axis at 0.1 m/s each, a notch half its depth
-/// deep across its middle to start the crack there.
+/// A bar `length` x `width` x `width` m with `cells` Kuhn cells' worth of resolution, its axis
+/// turned by `angle` (rad) about z from the x axis of an unturned lattice: the lattice's tets
+/// whose barycentres lie inside the turned bar (pinches at its boundary mended as the mesher
+/// mends them), so a crack across the bar runs at `angle` to the lattice's faces. Written as a
+/// Medit mesh beside the scene, with the scene text that pulls its two ends apart along its
+/// axis at 0.1 m/s each, a notch half its depth deep across its middle to start the crack
+/// there.
 fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, BenchError> {
     // Slow ends (0.1 m/s) and a deep notch (half the depth) give one crack across the notch
     // rather than a shattered bar: at 1 m/s and a quarter-depth notch the bar came apart in
     // dozens of pieces at 24 x 4 x 4 cells, and roughness then measures debris, not the crack.
     let (speed, duration, notch) = (0.1, 0.0015, 0.5);
     let (length, width) = (0.3, 0.05);
-    let (mut vertices, tets) = box_data([0.0; 3], [length, width, width], cells);
     let (s, c) = angle.sin_cos();
-    // Turned about the bar's centre, then moved to positive coordinates.
-    let centre = [0.5 * length, 0.5 * width, 0.5 * width];
     let shift = [0.3, 0.3, 0.0];
-    for v in &mut vertices {
-        let (x, y) = (v[0] - centre[0], v[1] - centre[1]);
-        *v = [c * x - s * y + shift[0], s * x + c * y + shift[1], v[2]];
-    }
+    let h = [
+        length / cells[0] as f64,
+        width / cells[1] as f64,
+        width / cells[2] as f64,
+    ];
+    // The lattice over the turned bar's bounds, centred on its centre (`shift`).
+    let half = [
+        0.5 * (length * c.abs() + width * s.abs()),
+        0.5 * (length * s.abs() + width * c.abs()),
+    ];
+    let counts = [
+        (2.0 * half[0] / h[0] - 1e-9).ceil().max(1.0) as usize,
+        (2.0 * half[1] / h[1] - 1e-9).ceil().max(1.0) as usize,
+        cells[2],
+    ];
+    let lo = [
+        shift[0] - 0.5 * counts[0] as f64 * h[0],
+        shift[1] - 0.5 * counts[1] as f64 * h[1],
+        0.0,
+    ];
+    let hi = [
+        lo[0] + counts[0] as f64 * h[0],
+        lo[1] + counts[1] as f64 * h[1],
+        width,
+    ];
+    let (all_vertices, lattice) = box_data(lo, hi, counts);
+    let inside = |t: &[u32; 4]| {
+        let b: [f64; 2] = std::array::from_fn(|k| {
+            t.iter().map(|&v| all_vertices[v as usize][k]).sum::<f64>() / 4.0 - shift[k]
+        });
+        let (along, across) = (c * b[0] + s * b[1], -s * b[0] + c * b[1]);
+        along.abs() <= 0.5 * length && across.abs() <= 0.5 * width
+    };
+    let mut kept: Vec<[u32; 4]> = lattice.iter().copied().filter(|t| inside(t)).collect();
+    perifrac_topology::mesher::manifold::make_boundary_manifold(&mut kept, &lattice);
+    // Only the vertices the kept tets use, renumbered.
+    let mut index = vec![u32::MAX; all_vertices.len()];
+    let mut vertices = Vec::new();
+    let tets: Vec<[u32; 4]> = kept
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                if index[v as usize] == u32::MAX {
+                    index[v as usize] = vertices.len() as u32;
+                    vertices.push(all_vertices[v as usize]);
+                }
+                index[v as usize]
+            })
+        })
+        .collect();
     let mesh = TetMeshData {
         tet_labels: vec![0; tets.len()],
         vertices,
@@ -172,14 +256,19 @@ fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, Benc
 /// The mode-I split of a bar along the lattice and at 30 degrees to it: crack area over the
 /// bar's section, and how far the crack faces' normals lean from the bar's axis (area-weighted
 /// mean and 90th percentile), with the pieces' validity.
-pub fn split(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+pub fn split(
+    effort: Effort,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(Table, Facets), BenchError> {
     let cells = match effort {
         Effort::Tiny => [12, 2, 2],
         Effort::Full => [48, 8, 8],
     };
     let dir = tempfile_dir()?;
+    let mut panels = Vec::new();
     let mut t = Table::new(&[
         "bar axis to the lattice",
+        "crack faces",
         "particles",
         "pieces",
         "crack area / section",
@@ -203,32 +292,58 @@ pub fn split(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Be
         let left = (0..y.len())
             .min_by(|&a, &b| along(&y[a]).total_cmp(&along(&y[b])))
             .map_or(0, |i| pieces.piece_of_tet[i]);
-        let mut area = 0.0;
-        let mut angles = Vec::new();
-        for f in 0..s.faces.len() {
-            if s.crack[f] == 0 || s.piece[f] != left {
-                continue;
-            }
-            let (a, n) = area_normal(&s, f);
-            let cos = (n[0] * axis[0] + n[1] * axis[1] + n[2] * axis[2]).abs();
-            area += a;
-            angles.push((cos.min(1.0).acos().to_degrees(), a));
+        let smoothed = smoothed(&s);
+        for (which, s) in [("as cut", &s), ("smoothed", &smoothed.0)] {
+            panels.push(crack_panel(
+                s,
+                left,
+                axis,
+                format!("{degrees:.0} degrees to the lattice, {which}"),
+            ));
+            let (area, mean, p90) = roughness(s, left, axis);
+            let (count, open, inside_out) = validity(s, pieces.count);
+            t.push(vec![
+                format!("{degrees:.0} degrees"),
+                which.into(),
+                particles.to_string(),
+                count.to_string(),
+                format!("{:.3}", area / (0.05 * 0.05)),
+                format!("{mean:.1}"),
+                format!("{p90:.1}"),
+                open.to_string(),
+                inside_out.to_string(),
+            ]);
         }
-        let mean = angles.iter().map(|(d, a)| d * a).sum::<f64>() / area.max(f64::MIN_POSITIVE);
-        let p90 = weighted_quantile(&mut angles, 0.9);
-        let (count, open, inside_out) = validity(&s, pieces.count);
-        t.push(vec![
-            format!("{degrees:.0} degrees"),
-            particles.to_string(),
-            count.to_string(),
-            format!("{:.3}", area / (0.05 * 0.05)),
-            format!("{mean:.1}"),
-            format!("{p90:.1}"),
-            open.to_string(),
-            inside_out.to_string(),
-        ]);
     }
-    Ok(t)
+    let facets = Facets {
+        title: "The split bar's crack, seen along the bar: each face coloured by its lean".into(),
+        scale: ("normal's angle from the bar's axis (degrees)".into(), 90.0),
+        panels,
+    };
+    Ok((t, facets))
+}
+
+/// The crack faces of `piece` seen from along `axis` (a horizontal axis), nearest last, each
+/// valued by the angle of its normal from the axis (degrees).
+fn crack_panel(s: &Surface, piece: u32, axis: [f64; 3], caption: String) -> Panel {
+    let across = [-axis[1], axis[0], 0.0];
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let mut faces: Vec<(f64, [[f64; 2]; 3], f64)> = (0..s.faces.len())
+        .filter(|&f| s.crack[f] != 0 && s.piece[f] == piece)
+        .map(|f| {
+            let corners = s.faces[f].map(|k| s.vertices[k as usize]);
+            let depth = corners.iter().map(|&c| dot(c, axis)).sum::<f64>();
+            let (_, n) = area_normal(s, f);
+            let lean = dot(n, axis).abs().min(1.0).acos().to_degrees();
+            (depth, corners.map(|c| [dot(c, across), c[2]]), lean)
+        })
+        .collect();
+    faces.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Panel {
+        caption,
+        triangles: faces.iter().map(|f| f.1).collect(),
+        values: faces.iter().map(|f| f.2).collect(),
+    }
 }
 
 /// A temporary directory for generated meshes.
@@ -274,18 +389,23 @@ pub fn wall_directions(
     let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(case, &e))?;
     let (s, _) = run_to_end(case, &mut setup, progress)?;
     let hist = direction_histogram(&s);
+    let smooth = direction_histogram(&smoothed(&s).0);
     let mean = 1.0 / DIRECTION_BINS as f64;
     let mut t = Table::new(&[
         "direction of the crack normal in the slab's plane (deg)",
-        "share of the crack area",
-        "share / mean",
+        "share of the crack area, as cut",
+        "share / mean, as cut",
+        "share, smoothed",
+        "share / mean, smoothed",
     ]);
     let width = 180.0 / DIRECTION_BINS as f64;
-    for (k, &h) in hist.iter().enumerate() {
+    for (k, (&h, &m)) in hist.iter().zip(&smooth).enumerate() {
         t.push(vec![
             format!("{:.0}-{:.0}", k as f64 * width, (k + 1) as f64 * width),
             format!("{:.1}%", 100.0 * h),
             format!("{:.2}", h / mean),
+            format!("{:.1}%", 100.0 * m),
+            format!("{:.2}", m / mean),
         ]);
     }
     let bars = Bars {
@@ -295,7 +415,10 @@ pub fn wall_directions(
         bins: (0..DIRECTION_BINS)
             .map(|k| format!("{:.0}", (k as f64 + 0.5) * width))
             .collect(),
-        series: vec![("today".into(), hist.iter().map(|h| h / mean).collect())],
+        series: vec![
+            ("as cut".into(), hist.iter().map(|h| h / mean).collect()),
+            ("smoothed".into(), smooth.iter().map(|h| h / mean).collect()),
+        ],
         line: Some(("target: 1.5 x the mean".into(), 1.5)),
     };
     Ok((t, bars))
@@ -348,6 +471,8 @@ pub fn fragment_sizes(
         "largest fragment's share of the volume",
         "pieces not closed 2-manifolds",
         "pieces inside out",
+        "crack smoothing of the last frame (ms)",
+        "smoothed pieces not closed 2-manifolds or inside out",
     ]);
     // Size classes of the distribution: 1, 2-3, 4-7, ... tets.
     let classes = 12;
@@ -377,6 +502,8 @@ pub fn fragment_sizes(
         let q = |x: f64| sorted[((sorted.len() - 1) as f64 * x).round() as usize];
         let single = tets.iter().filter(|&&n| n == 1).count();
         let (_, open, inside_out) = validity(&s, pieces.count);
+        let (smooth, seconds) = smoothed(&s);
+        let (_, smooth_open, smooth_inside_out) = validity(&smooth, pieces.count);
         t.push(vec![
             format!("{} x {} x {}", cells[0], cells[1], cells[2]),
             particles.to_string(),
@@ -395,6 +522,8 @@ pub fn fragment_sizes(
             format!("{:.1}%", 100.0 * largest_share),
             open.to_string(),
             inside_out.to_string(),
+            format!("{:.1}", 1e3 * seconds),
+            (smooth_open + smooth_inside_out).to_string(),
         ]);
         let mut hist = vec![0.0; classes];
         for &n in &tets {
@@ -418,4 +547,133 @@ pub fn fragment_sizes(
         line: None,
     };
     Ok((t, bars))
+}
+
+/// Roundness of a closed surface of volume `v` and area `a`: `6 sqrt(2) 3^(3/4) v / a^(3/2)`,
+/// 1 for a regular tet, 0 for a flat piece, negative for one inside out (a cube: 1.32).
+fn roundness(v: f64, a: f64) -> f64 {
+    if a > 0.0 {
+        6.0 * 2f64.sqrt() * 3f64.powf(0.75) * v / a.powf(1.5)
+    } else {
+        0.0
+    }
+}
+
+/// Volume and area of every piece of `s` (`count` pieces), with its vertices at `at`.
+fn piece_volumes_areas(s: &Surface, at: &[[f64; 3]], count: usize) -> Vec<(f64, f64)> {
+    let mut out = vec![(0.0, 0.0); count];
+    for (f, face) in s.faces.iter().enumerate() {
+        let [a, b, c] = face.map(|k| at[k as usize]);
+        let cr = [
+            b[1] * c[2] - b[2] * c[1],
+            b[2] * c[0] - b[0] * c[2],
+            b[0] * c[1] - b[1] * c[0],
+        ];
+        let (u, w) = (
+            [b[0] - a[0], b[1] - a[1], b[2] - a[2]],
+            [c[0] - a[0], c[1] - a[1], c[2] - a[2]],
+        );
+        let n = [
+            u[1] * w[2] - u[2] * w[1],
+            u[2] * w[0] - u[0] * w[2],
+            u[0] * w[1] - u[1] * w[0],
+        ];
+        let p = &mut out[s.piece[f] as usize];
+        p.0 += (a[0] * cr[0] + a[1] * cr[1] + a[2] * cr[2]) / 6.0;
+        p.1 += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    }
+    out
+}
+
+/// The default wall's small fragments at the end of its run, by size: how round they are at
+/// rest, where advection alone would put their vertices, and as a frame writes them (vertices
+/// fitted to the particles, pieces of up to [`perifrac_topology::RIGID_PIECE_TETS`] tets put
+/// back rigidly, cracks smoothed): the median roundness (a regular tet 1, flat 0) and the
+/// pieces flatter than a third of their rest roundness or inside out.
+pub fn debris_shapes(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let cells = match effort {
+        Effort::Tiny => "cells = [8, 8, 1]",
+        Effort::Full => "cells = [24, 24, 3]",
+    };
+    let text = WALL.replace("cells = [24, 24, 3]", cells);
+    let case = "the default wall's debris";
+    let scene = Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(case, &e))?;
+    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(case, &e))?;
+    step_to_end(case, &mut setup, progress)?;
+    let pieces = setup.driver.mesh().pieces();
+    let advected = setup.driver.mesh().surface_of(&pieces);
+    setup.driver.place_surface(&pieces);
+    let mut written = setup.driver.mesh().surface_of(&pieces);
+    written.smooth_cracks(&CrackSmoothing::default());
+    let mesh = setup.driver.mesh();
+    let rest: Vec<[f64; 3]> = advected
+        .vertex_ids
+        .iter()
+        .map(|&v| mesh.rest_positions()[mesh.vertex_origin()[v as usize] as usize])
+        .collect();
+    let mut rest = rest;
+    for &(m, a, b) in &advected.midpoints {
+        rest[m as usize] =
+            std::array::from_fn(|k| 0.5 * (rest[a as usize][k] + rest[b as usize][k]));
+    }
+    let shapes = [
+        piece_volumes_areas(&advected, &rest, pieces.count),
+        piece_volumes_areas(&advected, &advected.vertices, pieces.count),
+        piece_volumes_areas(&written, &written.vertices, pieces.count),
+    ];
+    let mut tets = vec![0usize; pieces.count];
+    for &p in &pieces.piece_of_tet {
+        tets[p as usize] += 1;
+    }
+    let mut t = Table::new(&[
+        "fragment size (tets)",
+        "fragments",
+        "median roundness at rest",
+        "as advected",
+        "as written",
+        "flat or inside out, as advected",
+        "as written",
+    ]);
+    for (name, lo, hi) in [
+        ("1", 1, 1),
+        ("2-3", 2, 3),
+        ("4-12", 4, 12),
+        ("13 and more", 13, usize::MAX),
+    ] {
+        let members: Vec<usize> = (0..pieces.count)
+            .filter(|&p| (lo..=hi).contains(&tets[p]))
+            .collect();
+        let round = |k: usize| -> Vec<f64> {
+            members
+                .iter()
+                .map(|&p| roundness(shapes[k][p].0, shapes[k][p].1))
+                .collect()
+        };
+        let median = |mut v: Vec<f64>| -> String {
+            if v.is_empty() {
+                return "-".into();
+            }
+            v.sort_by(f64::total_cmp);
+            format!("{:.2}", v[v.len() / 2])
+        };
+        let at_rest = round(0);
+        let bad = |k: usize| {
+            round(k)
+                .iter()
+                .zip(&at_rest)
+                .filter(|(r, r0)| **r < **r0 / 3.0)
+                .count()
+                .to_string()
+        };
+        t.push(vec![
+            name.into(),
+            members.len().to_string(),
+            median(at_rest.clone()),
+            median(round(1)),
+            median(round(2)),
+            bad(1),
+            bad(2),
+        ]);
+    }
+    Ok(t)
 }

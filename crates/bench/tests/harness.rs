@@ -230,8 +230,14 @@ fn contact_tables_measure_without_changing_the_run() {
 
 #[test]
 fn look_tables_hold_every_case_with_sound_pieces() {
-    let split = perifrac_bench::look::split(Effort::Tiny, &mut |_| {}).unwrap();
-    assert_eq!(split.rows.len(), 2);
+    let (split, faces) = perifrac_bench::look::split(Effort::Tiny, &mut |_| {}).unwrap();
+    // Two angles, as cut and smoothed; a panel of crack faces for each.
+    assert_eq!(split.rows.len(), 4);
+    assert_eq!(faces.panels.len(), 4);
+    assert!(faces
+        .panels
+        .iter()
+        .all(|p| !p.triangles.is_empty() && p.values.len() == p.triangles.len()));
     let (directions, bars) =
         perifrac_bench::look::wall_directions(Effort::Tiny, &mut |_| {}).unwrap();
     assert_eq!(directions.rows.len(), perifrac_bench::look::DIRECTION_BINS);
@@ -248,12 +254,28 @@ fn look_tables_hold_every_case_with_sound_pieces() {
     assert_eq!(bars.series[0].1.len(), perifrac_bench::look::DIRECTION_BINS);
     let (sizes, _) = perifrac_bench::look::fragment_sizes(Effort::Tiny, &mut |_| {}).unwrap();
     assert_eq!(sizes.rows.len(), 2);
-    // Every piece of every run is a closed 2-manifold, right side out.
-    for row in split.rows.iter().chain(&sizes.rows) {
+    // Every piece of every run is a closed 2-manifold, right side out, as cut and smoothed.
+    for row in &split.rows {
         let n = row.len();
         assert_eq!(
             (row[n - 2].as_str(), row[n - 1].as_str()),
             ("0", "0"),
+            "{row:?}"
+        );
+    }
+    // Debris by size class: four classes; as written, no piece flat or inside out.
+    let debris = perifrac_bench::look::debris_shapes(Effort::Tiny, &mut |_| {}).unwrap();
+    assert_eq!(debris.rows.len(), 4);
+    assert!(debris.rows.iter().all(|r| r[6] == "0"), "{:?}", debris.rows);
+    for row in &sizes.rows {
+        let n = row.len();
+        assert_eq!(
+            (
+                row[n - 4].as_str(),
+                row[n - 3].as_str(),
+                row[n - 1].as_str()
+            ),
+            ("0", "0", "0"),
             "{row:?}"
         );
     }

@@ -192,12 +192,17 @@ fn look_report(c: &Common) -> Result<()> {
     let report = Report::start(c)?;
     let mut progress = report.progress();
     let e = effort(c);
-    let split = perifrac_bench::look::split(e, &mut progress)?;
+    let (split, split_faces) = perifrac_bench::look::split(e, &mut progress)?;
     let (directions, direction_bars) = perifrac_bench::look::wall_directions(e, &mut progress)?;
     let (sizes, size_bars) = perifrac_bench::look::fragment_sizes(e, &mut progress)?;
+    let debris = perifrac_bench::look::debris_shapes(e, &mut progress)?;
     let mut md = report.header("look");
     md.push_str("## A bar pulled apart: the crack's roughness\n\n");
     md.push_str(&split.to_markdown());
+    match split_faces.write_png(&c.output.join("look_split.png")) {
+        Ok(()) => md.push_str("\n![the split bar's crack faces](look_split.png)\n"),
+        Err(e) => eprintln!("note: {e}; the table is written without its picture"),
+    }
     md.push_str("\n## The default wall: directions of its cracks in the slab's plane\n\n");
     md.push_str(&directions.to_markdown());
     for (bars, png, what) in [
@@ -213,6 +218,8 @@ fn look_report(c: &Common) -> Result<()> {
             Err(e) => eprintln!("note: {e}; the table is written without its chart"),
         }
     }
+    md.push_str("\n## The default wall's debris: shards or confetti\n\n");
+    md.push_str(&debris.to_markdown());
     report.write("look", &md)?;
     Ok(())
 }

@@ -330,7 +330,10 @@ impl FrameWriter {
         driver.place_surface(&pieces);
         let ids = driver.fragment_ids(&pieces, index);
         let mesh = driver.mesh();
-        let surface = mesh.surface_of(&pieces);
+        let mut surface = mesh.surface_of(&pieces);
+        if let Some(smoothing) = &self.options.smooth_cracks {
+            surface.smooth_cracks(smoothing);
+        }
         let velocities = mesh.vertex_velocities(driver.masses(), driver.solver().velocities());
         let shaded = mesh.shade(&surface, &velocities, &mesh.shading_options());
         // The surface vertex each shading copy belongs to: welding by it gives every piece's

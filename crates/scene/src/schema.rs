@@ -302,4 +302,7 @@ pub struct OutputSpec {
     /// Playback frames per second of the USD cache (default 24): the simulated time between
     /// two frames plays in one frame.
     pub fps: Option<f64>,
+    /// Relax the crack faces of every frame's surface towards their local crack plane
+    /// (default true; surface only, the physics does not see it).
+    pub smooth_cracks: Option<bool>,
 }

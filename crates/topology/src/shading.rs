@@ -141,24 +141,7 @@ impl Surface {
         };
         let normal: Vec<[f64; 3]> = self.faces.iter().map(|f| unit(&self.vertices, f)).collect();
         let rest_normal: Vec<[f64; 3]> = self.faces.iter().map(|f| unit(rest, f)).collect();
-        // Faces around each vertex (CSR), as (face, corner), in face order.
-        let mut start = vec![0usize; n + 1];
-        for f in &self.faces {
-            for &v in f {
-                start[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            start[v + 1] += start[v];
-        }
-        let mut fill = start.clone();
-        let mut around = vec![(0u32, 0u8); start[n]];
-        for (fi, f) in self.faces.iter().enumerate() {
-            for (c, &v) in f.iter().enumerate() {
-                around[fill[v as usize]] = (fi as u32, c as u8);
-                fill[v as usize] += 1;
-            }
-        }
+        let (start, around) = self.faces_around_vertices();
         let cos_sharp = options.sharp_angle.cos();
         let mut out = ShadedSurface {
             faces: vec![[0; 3]; self.faces.len()],

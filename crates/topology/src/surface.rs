@@ -105,6 +105,30 @@ impl Surface {
         }
     }
 
+    /// The faces around each vertex as CSR: vertex `v`'s are `around[start[v]..start[v + 1]]`,
+    /// each as (face, corner of the face at `v`), in face order.
+    pub(crate) fn faces_around_vertices(&self) -> (Vec<usize>, Vec<(u32, u8)>) {
+        let n = self.vertices.len();
+        let mut start = vec![0usize; n + 1];
+        for f in &self.faces {
+            for &v in f {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut around = vec![(0u32, 0u8); start[n]];
+        for (fi, f) in self.faces.iter().enumerate() {
+            for (c, &v) in f.iter().enumerate() {
+                around[fill[v as usize]] = (fi as u32, c as u8);
+                fill[v as usize] += 1;
+            }
+        }
+        (start, around)
+    }
+
     /// Enclosed volume by the divergence theorem (length^3); positive for an outward surface.
     pub fn signed_volume(&self) -> f64 {
         self.faces

@@ -77,6 +77,9 @@ pub struct OutputOptions {
     pub usd: Option<crate::usd::UsdLayout>,
     /// Playback frames per second of caches.
     pub fps: f64,
+    /// Relax each frame's crack faces towards their local crack plane, with these settings
+    /// (`None`: as cut).
+    pub smooth_cracks: Option<perifrac_topology::CrackSmoothing>,
 }
 
 /// When a run writes a checkpoint at a frame boundary (an interrupted run always writes one).
@@ -408,5 +411,10 @@ fn output_options(f: &SceneFile) -> OutputOptions {
             crate::usd::UsdLayout::Mesh
         }),
         fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
+        smooth_cracks: f
+            .output
+            .smooth_cracks
+            .unwrap_or(true)
+            .then(perifrac_topology::CrackSmoothing::default),
     }
 }

@@ -238,6 +238,19 @@ pub fn check_surfaces(m: &TetMesh) {
             "piece {p}: surface volume {sv} vs tets {}",
             volume[p]
         );
+        // Crack smoothing keeps every piece right side out (with its fold guard off and no
+        // move limit, random crack sets here turn pieces over: the guard is what holds).
+        let mut smooth = s.clone();
+        // Every piece, however small (by default pieces of 48 faces or fewer keep theirs).
+        smooth.smooth_cracks(&perifrac_topology::CrackSmoothing {
+            min_piece_faces: 0,
+            ..perifrac_topology::CrackSmoothing::default()
+        });
+        let after = smooth.signed_volume();
+        assert!(
+            after > 0.0,
+            "piece {p} turned inside out by smoothing ({after})"
+        );
         total_faces += s.faces.len();
     }
     let all = m.surface();
