@@ -372,24 +372,67 @@ impl Drop for TempDir {
     }
 }
 
-/// The default wall at the end of its run: the in-plane directions of its crack faces'
-/// normals as an area-weighted histogram of [`DIRECTION_BINS`] bins over 180 degrees (each
+/// A wall run to its end, once, for every table that reads it: its pieces, its surface where
+/// advection alone put the vertices, the surface a frame writes (before smoothing), and the
+/// rest positions of the surface's vertices and volumes of its tets.
+pub struct WallEnd {
+    cells: [usize; 3],
+    particles: usize,
+    pieces: Pieces,
+    advected: Surface,
+    placed: Surface,
+    rest: Vec<[f64; 3]>,
+    rest_volumes: Vec<f64>,
+}
+
+/// The default scene at `cells` cells, run to its end.
+fn wall_end(cells: [usize; 3], progress: &mut dyn FnMut(&str)) -> Result<WallEnd, BenchError> {
+    let case = format!("wall {}x{}x{}", cells[0], cells[1], cells[2]);
+    let text = WALL.replace("cells = [24, 24, 3]", &format!("cells = {cells:?}"));
+    let scene = Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(&case, &e))?;
+    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
+    step_to_end(&case, &mut setup, progress)?;
+    let pieces = setup.driver.mesh().pieces();
+    let advected = setup.driver.mesh().surface_of(&pieces);
+    setup.driver.place_surface(&pieces);
+    let mesh = setup.driver.mesh();
+    let placed = mesh.surface_of(&pieces);
+    let mut rest: Vec<[f64; 3]> = advected
+        .vertex_ids
+        .iter()
+        .map(|&v| mesh.rest_positions()[mesh.vertex_origin()[v as usize] as usize])
+        .collect();
+    for &(m, a, b) in &advected.midpoints {
+        rest[m as usize] =
+            std::array::from_fn(|k| 0.5 * (rest[a as usize][k] + rest[b as usize][k]));
+    }
+    Ok(WallEnd {
+        cells,
+        particles: setup.info.particles,
+        rest_volumes: mesh.rest_volumes(),
+        pieces,
+        advected,
+        placed,
+        rest,
+    })
+}
+
+/// The default wall (at its file's cells; 8 x 8 x 1 for a quick run) run to its end, for
+/// [`wall_directions`], [`fragment_sizes`] and [`debris_shapes`].
+pub fn default_wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<WallEnd, BenchError> {
+    match effort {
+        Effort::Tiny => wall_end([8, 8, 1], progress),
+        Effort::Full => wall_end([24, 24, 3], progress),
+    }
+}
+
+/// The default wall at the end of its run ([`default_wall`]): the in-plane directions of its
+/// crack faces' normals as an area-weighted histogram of [`DIRECTION_BINS`] bins over 180 degrees (each
 /// face weighted by its area times the in-plane part of its normal), as shares of the total.
-pub fn wall_directions(
-    effort: Effort,
-    progress: &mut dyn FnMut(&str),
-) -> Result<(Table, Bars), BenchError> {
-    let cells = match effort {
-        Effort::Tiny => "cells = [8, 8, 1]",
-        Effort::Full => "cells = [24, 24, 3]",
-    };
-    let text = WALL.replace("cells = [24, 24, 3]", cells);
-    let case = "the default wall";
-    let scene = Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(case, &e))?;
-    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(case, &e))?;
-    let (s, _) = run_to_end(case, &mut setup, progress)?;
-    let hist = direction_histogram(&s);
-    let smooth = direction_histogram(&smoothed(&s).0);
+pub fn wall_directions(wall: &WallEnd) -> (Table, Bars) {
+    let s = &wall.placed;
+    let hist = direction_histogram(s);
+    let smooth = direction_histogram(&smoothed(s).0);
     let mean = 1.0 / DIRECTION_BINS as f64;
     let mut t = Table::new(&[
         "direction of the crack normal in the slab's plane (deg)",
@@ -421,7 +464,7 @@ pub fn wall_directions(
         ],
         line: Some(("target: 1.5 x the mean".into(), 1.5)),
     };
-    Ok((t, bars))
+    (t, bars)
 }
 
 /// The area-weighted histogram of the in-plane (x-y) directions of the crack faces' normals,
@@ -453,9 +496,11 @@ pub fn direction_histogram(s: &Surface) -> Vec<f64> {
 
 /// The default wall at three resolutions: fragments, the share that are single tets, tets
 /// per fragment (median, 90th percentile, largest), the largest fragment's share of the
-/// volume, and the pieces' validity; with the distribution of fragment sizes.
+/// volume, and the pieces' validity; with the distribution of fragment sizes. `default` is
+/// [`default_wall`]'s run, reused at its resolution.
 pub fn fragment_sizes(
     effort: Effort,
+    default: &WallEnd,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Table, Bars), BenchError> {
     let runs: &[[usize; 3]] = match effort {
@@ -477,19 +522,22 @@ pub fn fragment_sizes(
     // Size classes of the distribution: 1, 2-3, 4-7, ... tets.
     let classes = 12;
     let mut series = Vec::new();
-    for cells in runs {
+    for &cells in runs {
         let case = format!("wall {}x{}x{}", cells[0], cells[1], cells[2]);
-        let text = WALL.replace("cells = [24, 24, 3]", &format!("cells = {cells:?}"));
-        let scene =
-            Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(&case, &e))?;
-        let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
-        let particles = setup.info.particles;
-        let (s, pieces) = run_to_end(&case, &mut setup, progress)?;
+        // The default wall's resolution is already run.
+        let other;
+        let wall = if cells == default.cells {
+            default
+        } else {
+            other = wall_end(cells, progress)?;
+            &other
+        };
+        let (s, pieces, particles) = (&wall.placed, &wall.pieces, wall.particles);
         let mut tets = vec![0usize; pieces.count];
         for &p in &pieces.piece_of_tet {
             tets[p as usize] += 1;
         }
-        let volumes = setup.driver.mesh().rest_volumes();
+        let volumes = &wall.rest_volumes;
         let mut volume = vec![0.0; pieces.count];
         for (t, &p) in pieces.piece_of_tet.iter().enumerate() {
             volume[p as usize] += volumes[t];
@@ -501,8 +549,8 @@ pub fn fragment_sizes(
         sorted.sort_unstable();
         let q = |x: f64| sorted[((sorted.len() - 1) as f64 * x).round() as usize];
         let single = tets.iter().filter(|&&n| n == 1).count();
-        let (_, open, inside_out) = validity(&s, pieces.count);
-        let (smooth, seconds) = smoothed(&s);
+        let (_, open, inside_out) = validity(s, pieces.count);
+        let (smooth, seconds) = smoothed(s);
         let (_, smooth_open, smooth_inside_out) = validity(&smooth, pieces.count);
         t.push(vec![
             format!("{} x {} x {}", cells[0], cells[1], cells[2]),
@@ -590,35 +638,14 @@ fn piece_volumes_areas(s: &Surface, at: &[[f64; 3]], count: usize) -> Vec<(f64, 
 /// fitted to the particles, pieces of up to [`perifrac_topology::RIGID_PIECE_TETS`] tets put
 /// back rigidly, cracks smoothed): the median roundness (a regular tet 1, flat 0) and the
 /// pieces flatter than a third of their rest roundness or inside out.
-pub fn debris_shapes(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
-    let cells = match effort {
-        Effort::Tiny => "cells = [8, 8, 1]",
-        Effort::Full => "cells = [24, 24, 3]",
-    };
-    let text = WALL.replace("cells = [24, 24, 3]", cells);
-    let case = "the default wall's debris";
-    let scene = Scene::parse(&text, Path::new("wall.toml")).map_err(|e| scene_error(case, &e))?;
-    let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(case, &e))?;
-    step_to_end(case, &mut setup, progress)?;
-    let pieces = setup.driver.mesh().pieces();
-    let advected = setup.driver.mesh().surface_of(&pieces);
-    setup.driver.place_surface(&pieces);
-    let mut written = setup.driver.mesh().surface_of(&pieces);
+pub fn debris_shapes(wall: &WallEnd) -> Table {
+    let (pieces, advected) = (&wall.pieces, &wall.advected);
+    let mut written = wall.placed.clone();
     written.smooth_cracks(&CrackSmoothing::default());
-    let mesh = setup.driver.mesh();
-    let rest: Vec<[f64; 3]> = advected
-        .vertex_ids
-        .iter()
-        .map(|&v| mesh.rest_positions()[mesh.vertex_origin()[v as usize] as usize])
-        .collect();
-    let mut rest = rest;
-    for &(m, a, b) in &advected.midpoints {
-        rest[m as usize] =
-            std::array::from_fn(|k| 0.5 * (rest[a as usize][k] + rest[b as usize][k]));
-    }
+    let rest = &wall.rest;
     let shapes = [
-        piece_volumes_areas(&advected, &rest, pieces.count),
-        piece_volumes_areas(&advected, &advected.vertices, pieces.count),
+        piece_volumes_areas(advected, rest, pieces.count),
+        piece_volumes_areas(advected, &advected.vertices, pieces.count),
         piece_volumes_areas(&written, &written.vertices, pieces.count),
     ];
     let mut tets = vec![0usize; pieces.count];
@@ -675,5 +702,5 @@ pub fn debris_shapes(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<T
             bad(2),
         ]);
     }
-    Ok(t)
+    t
 }

@@ -238,8 +238,8 @@ fn look_tables_hold_every_case_with_sound_pieces() {
         .panels
         .iter()
         .all(|p| !p.triangles.is_empty() && p.values.len() == p.triangles.len()));
-    let (directions, bars) =
-        perifrac_bench::look::wall_directions(Effort::Tiny, &mut |_| {}).unwrap();
+    let wall = perifrac_bench::look::default_wall(Effort::Tiny, &mut |_| {}).unwrap();
+    let (directions, bars) = perifrac_bench::look::wall_directions(&wall);
     assert_eq!(directions.rows.len(), perifrac_bench::look::DIRECTION_BINS);
     // The shares over the bins add up to the whole crack area.
     let total: f64 = directions
@@ -252,7 +252,8 @@ fn look_tables_hold_every_case_with_sound_pieces() {
         "{total}"
     );
     assert_eq!(bars.series[0].1.len(), perifrac_bench::look::DIRECTION_BINS);
-    let (sizes, _) = perifrac_bench::look::fragment_sizes(Effort::Tiny, &mut |_| {}).unwrap();
+    let (sizes, _) =
+        perifrac_bench::look::fragment_sizes(Effort::Tiny, &wall, &mut |_| {}).unwrap();
     assert_eq!(sizes.rows.len(), 2);
     // Every piece of every run is a closed 2-manifold, right side out, as cut and smoothed.
     for row in &split.rows {
@@ -264,7 +265,7 @@ fn look_tables_hold_every_case_with_sound_pieces() {
         );
     }
     // Debris by size class: four classes; as written, no piece flat or inside out.
-    let debris = perifrac_bench::look::debris_shapes(Effort::Tiny, &mut |_| {}).unwrap();
+    let debris = perifrac_bench::look::debris_shapes(&wall);
     assert_eq!(debris.rows.len(), 4);
     assert!(debris.rows.iter().all(|r| r[6] == "0"), "{:?}", debris.rows);
     for row in &sizes.rows {

@@ -193,9 +193,10 @@ fn look_report(c: &Common) -> Result<()> {
     let mut progress = report.progress();
     let e = effort(c);
     let (split, split_faces) = perifrac_bench::look::split(e, &mut progress)?;
-    let (directions, direction_bars) = perifrac_bench::look::wall_directions(e, &mut progress)?;
-    let (sizes, size_bars) = perifrac_bench::look::fragment_sizes(e, &mut progress)?;
-    let debris = perifrac_bench::look::debris_shapes(e, &mut progress)?;
+    let wall = perifrac_bench::look::default_wall(e, &mut progress)?;
+    let (directions, direction_bars) = perifrac_bench::look::wall_directions(&wall);
+    let (sizes, size_bars) = perifrac_bench::look::fragment_sizes(e, &wall, &mut progress)?;
+    let debris = perifrac_bench::look::debris_shapes(&wall);
     let mut md = report.header("look");
     md.push_str("## A bar pulled apart: the crack's roughness\n\n");
     md.push_str(&split.to_markdown());

@@ -160,6 +160,15 @@ impl Surface {
         let watched: Vec<u32> = (0..self.faces.len() as u32)
             .filter(|&f| watched_mark[f as usize])
             .collect();
+        // Each watched face's area vector as cut, and its length: what every pass checks
+        // against.
+        let watched_as_cut: Vec<([f64; 3], f64)> = watched
+            .iter()
+            .map(|&f| {
+                let m = area_vector(&original, &self.faces[f as usize]);
+                (m, norm(m))
+            })
+            .collect();
         // Per pass, each ring face's area vector (twice the area, along the normal), area and
         // area-weighted centroid.
         let mut face_data = vec![([0.0; 3], 0.0, [0.0; 3]); self.faces.len()];
@@ -236,10 +245,10 @@ impl Surface {
             // far (against the face as cut), until none does: each pass starts and ends sound.
             loop {
                 let mut any = false;
-                for &f in &watched {
+                for (&f, &(was, lw)) in watched.iter().zip(&watched_as_cut) {
                     let f = &self.faces[f as usize];
-                    let (was, now) = (area_vector(&original, f), area_vector(&next, f));
-                    let (lw, ln) = (norm(was), norm(now));
+                    let now = area_vector(&next, f);
+                    let ln = norm(now);
                     let bad = lw > 0.0
                         && (ln < MIN_AREA_SHARE * lw || dot(was, now) <= MIN_NORMAL_COS * lw * ln);
                     if bad {
