@@ -134,7 +134,9 @@ fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
         .map(|f| f.map(|v| ids[v as usize]))
         .collect();
     let (count, of_face) = components(&faces, n);
-    assert_eq!(count as u64, last["fragments"].as_u64().unwrap());
+    // The pieces of at most `debris_tets` tets are debris points, not surfaces.
+    let debris = last["debris"]["pieces"].as_u64().unwrap_or(0);
+    assert_eq!(count as u64 + debris, last["fragments"].as_u64().unwrap());
     assert!(count > 1, "the wall did not break: {count} fragment(s)");
     // The connected pieces are the fragments the faces name.
     let fragment = frame.fragment.unwrap();
@@ -345,6 +347,13 @@ fn every_piece_of_every_frame_passes_the_independent_check() {
     }
     let tmp = tempfile::tempdir().unwrap();
     let scene = tiny_wall(tmp.path());
+    // Every piece as a surface, the smallest too (by default they are debris points).
+    let text = std::fs::read_to_string(&scene).unwrap();
+    std::fs::write(
+        &scene,
+        text.replace("[output]\n", "[output]\ndebris_tets = 0\n"),
+    )
+    .unwrap();
     let out = tmp.path().join("out");
     ok(&["run", s(&scene), "-o", s(&out), "--frames", "8"]);
     let stdout = common::python_script("check_pieces.py", &[out.as_os_str()]);
@@ -405,4 +414,86 @@ fn crack_smoothing_leaves_the_physics_byte_identical() {
         surfaces_differ |= sa.vertices != sb.vertices;
     }
     assert!(surfaces_differ, "smoothing moved no vertex of any frame");
+}
+
+/// Pieces of at most `debris_tets` tets leave the surface for `frames/debris_NNNN.ply`: each
+/// such fragment is one point at the centre of mass of its particles, with their mass, the
+/// ball radius of their volume and their mean velocity; every other fragment keeps its surface,
+/// as it is with debris off; the particles do not change.
+#[test]
+fn small_pieces_are_written_as_debris_points() {
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tiny_wall(tmp.path());
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let all = tmp.path().join("tiny_wall_all.toml");
+    std::fs::write(
+        &all,
+        text.replace("[output]\n", "[output]\ndebris_tets = 0\n"),
+    )
+    .unwrap();
+    let (a, b) = (tmp.path().join("debris"), tmp.path().join("all"));
+    ok(&["run", s(&scene), "-o", s(&a), "--frames", "4"]);
+    ok(&["run", s(&all), "-o", s(&b), "--frames", "4"]);
+    let last = "frames/particles_0004.ply";
+    assert_eq!(
+        std::fs::read(a.join(last)).unwrap(),
+        std::fs::read(b.join(last)).unwrap()
+    );
+    let run = manifest(&a);
+    let frame = &run["frames"][4];
+    let debris = read_ply_points(&a.join(frame["debris"]["path"].as_str().unwrap())).unwrap();
+    let pieces = frame["debris"]["pieces"].as_u64().unwrap() as usize;
+    assert_eq!(debris.points.len(), pieces);
+    assert!(pieces > 0, "the tiny wall left no debris to test");
+    assert!(manifest(&b)["frames"][4]["debris"].is_null());
+    let particles = read_ply_points(&a.join(last)).unwrap();
+    let (pm, pf) = (
+        particles.scalar("mass").unwrap(),
+        particles.scalar("fragment").unwrap(),
+    );
+    let (dm, df, dr) = (
+        debris.scalar("mass").unwrap(),
+        debris.scalar("fragment").unwrap(),
+        debris.scalar("radius").unwrap(),
+    );
+    let density = 2200.0; // wall.toml's glass
+    for k in 0..pieces {
+        let mine: Vec<usize> = (0..pf.len()).filter(|&i| pf[i] == df[k]).collect();
+        assert!(
+            (1..=3).contains(&mine.len()),
+            "debris fragment {} has {} particles",
+            df[k],
+            mine.len()
+        );
+        let mass: f64 = mine.iter().map(|&i| pm[i]).sum();
+        // Both files store f32 (6e-8 relative each): sums of up to 3 agree to 1e-6.
+        assert!(
+            (dm[k] / mass - 1.0).abs() < 1e-6,
+            "{} against {mass}",
+            dm[k]
+        );
+        let volume = 4.0 / 3.0 * std::f64::consts::PI * dr[k].powi(3);
+        assert!((volume * density / mass - 1.0).abs() < 1e-5);
+        for d in 0..3 {
+            let centre: f64 = mine
+                .iter()
+                .map(|&i| pm[i] * particles.points[i][d])
+                .sum::<f64>()
+                / mass;
+            // f32 positions of metre-sized scenes: 1e-7 m apart at most.
+            assert!((debris.points[k][d] - centre).abs() < 1e-6);
+        }
+    }
+    // The surfaces: with debris on, the fragments of the surface are those of the full
+    // surface less the debris, with the same faces.
+    let (sa, sb) = (
+        read_ply_frame(&a.join("frames/surface_0004.ply")).unwrap(),
+        read_ply_frame(&b.join("frames/surface_0004.ply")).unwrap(),
+    );
+    let is_debris = |f: u32| df.contains(&f64::from(f));
+    let (fa, fb) = (sa.fragment.unwrap(), sb.fragment.unwrap());
+    assert!(fa.iter().all(|&f| !is_debris(f)));
+    let kept: Vec<u32> = fb.iter().copied().filter(|&f| !is_debris(f)).collect();
+    assert_eq!(fa, kept);
+    assert!(fb.len() > fa.len());
 }

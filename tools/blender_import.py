@@ -6,7 +6,9 @@ on its own frame, with two materials ("perifrac surface", "perifrac crack") chos
 the flag, which it also keeps as an integer face attribute `crack`; the frame's normals as
 custom normals (smooth outside, flat cracks: the PLY's vertices are split where they should
 not be smooth), its texture coordinates as the UV map `st`, its velocities as the point
-attribute `velocity` (m/s) and its fragment ids as the face attribute `fragment`. It adds the
+attribute `velocity` (m/s) and its fragment ids as the face attribute `fragment`; a frame's
+debris (`frames/debris_NNNN.ply`: pieces too small to be written as surfaces) becomes one more
+object of icosahedra of the debris' radii, in the crack material. It adds the
 run's balls (keyed per frame) and ground planes (or a backdrop floor below everything when the
 run has none), turns the run's up axis (`run.json` "up") into Blender's +Z, and adds a camera
 framed as `perifrac render` frames it, a sun and a fill light, the run's playback rate
@@ -224,6 +226,42 @@ def frame_mesh(name, ply, surface_mat, crack_mat):
     return mesh, len(rows), len(faces), sum(crack)
 
 
+# The unit icosahedron: each debris point becomes one, scaled to the point's radius.
+_T = (1.0 + 5.0 ** 0.5) / 2.0
+_N = (1.0 + _T * _T) ** 0.5
+ICO_VERTICES = [(a / _N, b / _N, c / _N) for a, b, c in (
+    (-1, _T, 0), (1, _T, 0), (-1, -_T, 0), (1, -_T, 0),
+    (0, -1, _T), (0, 1, _T), (0, -1, -_T), (0, 1, -_T),
+    (_T, 0, -1), (_T, 0, 1), (-_T, 0, -1), (-_T, 0, 1))]
+ICO_FACES = [
+    (0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+    (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+    (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+
+
+def debris_mesh(name, ply, crack_mat):
+    """A frame's debris points (`frames/debris_NNNN.ply`) as icosahedra of their radii, with
+    the `fragment` and `velocity` of their point on every vertex."""
+    rows = ply.get("vertex", [])
+    vertices, faces, fragment, velocity = [], [], [], []
+    for r in rows:
+        base = len(vertices)
+        vertices.extend((r["x"] + r["radius"] * a, r["y"] + r["radius"] * b,
+                         r["z"] + r["radius"] * c) for a, b, c in ICO_VERTICES)
+        faces.extend(tuple(base + k for k in f) for f in ICO_FACES)
+        fragment.extend([int(r.get("fragment", 0))] * len(ICO_VERTICES))
+        velocity.extend((r.get("vx", 0.0), r.get("vy", 0.0), r.get("vz", 0.0)) * len(ICO_VERTICES))
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(vertices, [], faces)
+    mesh.materials.append(crack_mat)
+    frag = mesh.attributes.new("fragment", "INT", "POINT")
+    frag.data.foreach_set("value", fragment)
+    vel = mesh.attributes.new("velocity", "FLOAT_VECTOR", "POINT")
+    vel.data.foreach_set("vector", velocity)
+    mesh.update()
+    return mesh, len(rows)
+
+
 def bounds_union(boxes):
     lo = [min(b["min"][k] for b in boxes) for k in range(3)]
     hi = [max(b["max"][k] for b in boxes) for k in range(3)]
@@ -318,6 +356,10 @@ def import_run(run_dir, only=None, usd=None):
         by_crack = crack_material((0.62, 0.60, 0.55), (0.90, 0.38, 0.06))
         for slot in surface.material_slots:
             slot.material = by_crack
+        debris = bpy.data.objects.get("debris")
+        if debris is not None and hasattr(debris.data, "materials"):
+            debris.data.materials.clear()
+            debris.data.materials.append(crack_mat)
         frames = []
     for fr in frames:
         ply = read_ply(os.path.join(run_dir, fr["surface"]))
@@ -327,6 +369,13 @@ def import_run(run_dir, only=None, usd=None):
         if only is None:
             show_only_on(obj, fr["index"], scene.frame_end)
         report.append((fr["index"], nv, nf, nc))
+        if fr.get("debris"):
+            dply = read_ply(os.path.join(run_dir, fr["debris"]["path"]))
+            dmesh, _ = debris_mesh(f"debris_{fr['index']:04d}", dply, crack_mat)
+            dobj = bpy.data.objects.new(dmesh.name, dmesh)
+            link(dobj, col, root)
+            if only is None:
+                show_only_on(dobj, fr["index"], scene.frame_end)
     ball_mat = material("perifrac ball", (0.55, 0.57, 0.60))
     balls = [] if usd is not None else run["frames"][0].get("balls", [])
     for b, ball in enumerate(balls):

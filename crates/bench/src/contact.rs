@@ -158,7 +158,7 @@ fn pile_scene(cells: [usize; 3], piece: usize, contact: bool) -> String {
     let h = 0.01;
     let size = cells.map(|c| c as f64 * h);
     let mut text = format!(
-        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{}, {}, {}]\n\n\
+        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{}, {}, {}]\nstructure = \"lattice\"\n\n\
          [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
          s_crit = 0.0005\n\n[simulation]\nduration = 0.001\nself_contact = {contact}\n\n\
          [output]\nframes = 1\n",

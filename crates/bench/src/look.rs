@@ -9,6 +9,7 @@ use std::path::Path;
 
 use perifrac_io::{write_tet_mesh, TetFormat, TetMeshData};
 use perifrac_scene::{Scene, Setup};
+use perifrac_topology::mesher::unstructured_box_data;
 use perifrac_topology::{primitives::box_data, CrackSmoothing, Pieces, Surface};
 
 use crate::bars::Bars;
@@ -149,7 +150,12 @@ fn validity(s: &Surface, pieces: usize) -> (usize, usize, usize) {
 /// Medit mesh beside the scene, with the scene text that pulls its two ends apart along its
 /// axis at 0.1 m/s each, a notch half its depth deep across its middle to start the crack
 /// there.
-fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, BenchError> {
+fn split_scene(
+    dir: &Path,
+    angle: f64,
+    cells: [usize; 3],
+    unstructured: bool,
+) -> Result<String, BenchError> {
     // Slow ends (0.1 m/s) and a deep notch (half the depth) give one crack across the notch
     // rather than a shattered bar: at 1 m/s and a quarter-depth notch the bar came apart in
     // dozens of pieces at 24 x 4 x 4 cells, and roughness then measures debris, not the crack.
@@ -182,7 +188,12 @@ fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, Benc
         lo[1] + counts[1] as f64 * h[1],
         width,
     ];
-    let (all_vertices, lattice) = box_data(lo, hi, counts);
+    let (all_vertices, lattice) = if unstructured {
+        // Along x only (no lattice to turn): the box is the bar, every tet kept.
+        unstructured_box_data(lo, hi, counts, 1).map_err(|e| scene_error("split", &e))?
+    } else {
+        box_data(lo, hi, counts)
+    };
     let inside = |t: &[u32; 4]| {
         let b: [f64; 2] = std::array::from_fn(|k| {
             t.iter().map(|&v| all_vertices[v as usize][k]).sum::<f64>() / 4.0 - shift[k]
@@ -213,7 +224,11 @@ fn split_scene(dir: &Path, angle: f64, cells: [usize; 3]) -> Result<String, Benc
         tets,
         ..TetMeshData::default()
     };
-    let path = dir.join(format!("bar_{:.0}.mesh", angle.to_degrees()));
+    let path = dir.join(format!(
+        "bar_{:.0}{}.mesh",
+        angle.to_degrees(),
+        if unstructured { "_unstructured" } else { "" }
+    ));
     write_tet_mesh(&path, &mesh, TetFormat::Medit).map_err(|e| scene_error("split", &e))?;
     let axis = [c, s, 0.0];
     let end = |sign: f64| [0, 1].map(|k| shift[k] + sign * 0.5 * length * axis[k]);
@@ -267,7 +282,7 @@ pub fn split(
     let dir = tempfile_dir()?;
     let mut panels = Vec::new();
     let mut t = Table::new(&[
-        "bar axis to the lattice",
+        "bar's mesh",
         "crack faces",
         "particles",
         "pieces",
@@ -277,9 +292,14 @@ pub fn split(
         "pieces not closed 2-manifolds",
         "pieces inside out",
     ]);
-    for degrees in [0.0f64, 30.0] {
-        let case = format!("split at {degrees} degrees");
-        let text = split_scene(dir.path(), degrees.to_radians(), cells)?;
+    for (degrees, unstructured) in [(0.0f64, false), (30.0, false), (0.0, true)] {
+        let mesh = if unstructured {
+            "unstructured tets".to_string()
+        } else {
+            format!("{degrees:.0} degrees to the lattice")
+        };
+        let case = format!("split, {mesh}");
+        let text = split_scene(dir.path(), degrees.to_radians(), cells, unstructured)?;
         let scene = Scene::parse(&text, &dir.path().join("split.toml"))
             .map_err(|e| scene_error(&case, &e))?;
         let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
@@ -294,16 +314,11 @@ pub fn split(
             .map_or(0, |i| pieces.piece_of_tet[i]);
         let smoothed = smoothed(&s);
         for (which, s) in [("as cut", &s), ("smoothed", &smoothed.0)] {
-            panels.push(crack_panel(
-                s,
-                left,
-                axis,
-                format!("{degrees:.0} degrees to the lattice, {which}"),
-            ));
+            panels.push(crack_panel(s, left, axis, format!("{mesh}, {which}")));
             let (area, mean, p90) = roughness(s, left, axis);
             let (count, open, inside_out) = validity(s, pieces.count);
             t.push(vec![
-                format!("{degrees:.0} degrees"),
+                mesh.clone(),
                 which.into(),
                 particles.to_string(),
                 count.to_string(),
@@ -637,7 +652,9 @@ fn piece_volumes_areas(s: &Surface, at: &[[f64; 3]], count: usize) -> Vec<(f64, 
 /// rest, where advection alone would put their vertices, and as a frame writes them (vertices
 /// fitted to the particles, pieces of up to [`perifrac_topology::RIGID_PIECE_TETS`] tets put
 /// back rigidly, cracks smoothed): the median roundness (a regular tet 1, flat 0) and the
-/// pieces flatter than a third of their rest roundness or inside out.
+/// pieces flatter than a third of their rest roundness or inside out; with each size's share
+/// of the volume and how a run writes it (debris points up to
+/// [`perifrac_scene::setup::DEFAULT_DEBRIS_TETS`] tets).
 pub fn debris_shapes(wall: &WallEnd) -> Table {
     let (pieces, advected) = (&wall.pieces, &wall.advected);
     let mut written = wall.placed.clone();
@@ -655,6 +672,8 @@ pub fn debris_shapes(wall: &WallEnd) -> Table {
     let mut t = Table::new(&[
         "fragment size (tets)",
         "fragments",
+        "share of the volume",
+        "written as",
         "median roundness at rest",
         "as advected",
         "as written",
@@ -684,6 +703,8 @@ pub fn debris_shapes(wall: &WallEnd) -> Table {
             format!("{:.2}", v[v.len() / 2])
         };
         let at_rest = round(0);
+        let total: f64 = shapes[0].iter().map(|s| s.0).sum();
+        let volume: f64 = members.iter().map(|&p| shapes[0][p].0).sum();
         let bad = |k: usize| {
             round(k)
                 .iter()
@@ -695,6 +716,12 @@ pub fn debris_shapes(wall: &WallEnd) -> Table {
         t.push(vec![
             name.into(),
             members.len().to_string(),
+            format!("{:.1}%", 100.0 * volume / total),
+            if hi <= perifrac_scene::setup::DEFAULT_DEBRIS_TETS {
+                "debris points".into()
+            } else {
+                "surfaces".into()
+            },
             median(at_rest.clone()),
             median(round(1)),
             median(round(2)),

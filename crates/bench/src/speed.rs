@@ -224,7 +224,7 @@ pub fn fracture_share(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<
         "speed: stage shares while a slab of {cells:?} cells shatters"
     ));
     let text = format!(
-        "[mesh]\nprimitive = \"box\"\nsize = [0.6, 0.6, 0.06]\ncells = [{}, {}, {}]\n\n\
+        "[mesh]\nprimitive = \"box\"\nsize = [0.6, 0.6, 0.06]\ncells = [{}, {}, {}]\nstructure = \"lattice\"\n\n\
          [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
          s_crit = 0.0005\n\n[simulation]\nduration = 0.001\n\n\
          [[ball]]\ncenter = [0.3, 0.3, 0.111]\nradius = 0.05\nvelocity = [0.0, 0.0, -150.0]\n\n\

@@ -303,7 +303,7 @@ fn refused(name: &str, message: String, started: Instant) -> CaseResult {
 /// A block of the same steel with `cells` 1 cm cells as a scene's mesh table.
 fn block_mesh(cells: [usize; 3]) -> String {
     format!(
-        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{}, {}, {}]\n",
+        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{}, {}, {}]\nstructure = \"lattice\"\n",
         cells[0] as f64 * 0.01,
         cells[1] as f64 * 0.01,
         cells[2] as f64 * 0.01,

@@ -231,9 +231,10 @@ fn contact_tables_measure_without_changing_the_run() {
 #[test]
 fn look_tables_hold_every_case_with_sound_pieces() {
     let (split, faces) = perifrac_bench::look::split(Effort::Tiny, &mut |_| {}).unwrap();
-    // Two angles, as cut and smoothed; a panel of crack faces for each.
-    assert_eq!(split.rows.len(), 4);
-    assert_eq!(faces.panels.len(), 4);
+    // Two angles to the lattice and an unstructured bar, as cut and smoothed; a panel of crack
+    // faces for each.
+    assert_eq!(split.rows.len(), 6);
+    assert_eq!(faces.panels.len(), 6);
     assert!(faces
         .panels
         .iter()
@@ -267,7 +268,7 @@ fn look_tables_hold_every_case_with_sound_pieces() {
     // Debris by size class: four classes; as written, no piece flat or inside out.
     let debris = perifrac_bench::look::debris_shapes(&wall);
     assert_eq!(debris.rows.len(), 4);
-    assert!(debris.rows.iter().all(|r| r[6] == "0"), "{:?}", debris.rows);
+    assert!(debris.rows.iter().all(|r| r[8] == "0"), "{:?}", debris.rows);
     for row in &sizes.rows {
         let n = row.len();
         assert_eq!(

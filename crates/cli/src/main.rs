@@ -64,6 +64,14 @@ enum Command {
         /// Exact cell counts along x, y, z, e.g. `40,8,40`.
         #[arg(long, value_delimiter = ',')]
         cells: Option<Vec<usize>>,
+        /// Boxes: a Delaunay mesh of well-spaced random points (as many tets as the cells
+        /// would give, no direction preferred, as scenes use by default) instead of the Kuhn
+        /// lattice.
+        #[arg(long)]
+        unstructured: bool,
+        /// Seed of `--unstructured`'s points.
+        #[arg(long, requires = "unstructured", default_value_t = 1)]
+        seed: u64,
         /// Go on when the mesh would need more memory than is available.
         #[arg(long)]
         allow_large: bool,
@@ -102,6 +110,8 @@ fn main() -> ExitCode {
             cells,
             edge_length,
             tetgen,
+            unstructured,
+            seed,
             allow_large,
         } => mesh::run(
             &input,
@@ -111,6 +121,7 @@ fn main() -> ExitCode {
                 cells: cells.as_deref(),
                 edge_length,
                 tetgen,
+                unstructured: unstructured.then_some(seed),
                 allow_large,
             },
         ),

@@ -6,7 +6,9 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 use perifrac_io::TetFormat;
-use perifrac_topology::mesher::{estimated_tets, mesh_surface, MesherOptions, MesherReport};
+use perifrac_topology::mesher::{
+    estimated_tets, mesh_surface, unstructured_box_data, MesherOptions, MesherReport,
+};
 use perifrac_topology::spec::{parse_primitive, parse_round};
 use perifrac_topology::{primitives, TetMesh};
 
@@ -41,6 +43,8 @@ pub struct MeshArgs<'a> {
     pub edge_length: Option<f64>,
     /// Use TetGen instead of the built-in mesher (surfaces only).
     pub tetgen: bool,
+    /// Boxes only: unstructured tets from points of this seed instead of the Kuhn lattice.
+    pub unstructured: Option<u64>,
     /// Go on when the estimated memory passes what is available.
     pub allow_large: bool,
 }
@@ -58,6 +62,9 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         if args.cells.is_some() {
             bail!("--cells applies to primitives only; use --resolution or --edge-length");
         }
+        if args.unstructured.is_some() {
+            bail!("--unstructured applies to box primitives only");
+        }
         return if args.tetgen {
             run_tetgen(path, output)
         } else {
@@ -65,8 +72,8 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         };
     }
     if let Some((vertices, faces)) = parse_round(input)? {
-        if args.cells.is_some() || args.tetgen {
-            bail!("--cells and --tetgen do not apply to `{input}`");
+        if args.cells.is_some() || args.tetgen || args.unstructured.is_some() {
+            bail!("--cells, --tetgen and --unstructured do not apply to `{input}`");
         }
         return mesh_and_write(&vertices, &faces, input, output, args);
     }
@@ -78,6 +85,7 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         output,
         args.resolution.unwrap_or(DEFAULT_PRIMITIVE_RESOLUTION),
         args.cells,
+        args.unstructured,
         args.allow_large,
     )
 }
@@ -269,6 +277,7 @@ fn run_primitive(
     output: &Path,
     resolution: usize,
     cells: Option<&[usize]>,
+    unstructured: Option<u64>,
     allow_large: bool,
 ) -> Result<()> {
     let prim = parse_primitive(spec)?;
@@ -280,7 +289,14 @@ fn run_primitive(
     primitives::check_box([0.0; 3], prim.size, counts).with_context(what)?;
     check_memory(tets as u64, vertices as u64, allow_large)?;
     let format = TetFormat::from_path(output)?;
-    let mesh = primitives::try_box_mesh([0.0; 3], prim.size, counts).with_context(what)?;
+    let mesh = match unstructured {
+        None => primitives::try_box_mesh([0.0; 3], prim.size, counts).with_context(what)?,
+        Some(seed) => {
+            let (v, t) =
+                unstructured_box_data([0.0; 3], prim.size, counts, seed).with_context(what)?;
+            TetMesh::new(v, t).with_context(what)?.0
+        }
+    };
     let data = to_data(&mesh, vec![0; mesh.num_tets()], Vec::new());
     perifrac_io::write_tet_mesh(output, &data, format)?;
     eprintln!(
@@ -333,7 +349,7 @@ mod tests {
                 "more than a mesh can index",
             ),
         ] {
-            let e = run_primitive(spec, &out, 20, cells.as_deref(), false).unwrap_err();
+            let e = run_primitive(spec, &out, 20, cells.as_deref(), None, false).unwrap_err();
             let msg = format!("{e:#}");
             assert!(msg.contains(spec) && msg.contains(expect), "{spec}: {msg}");
             assert!(!out.exists());

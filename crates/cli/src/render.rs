@@ -15,7 +15,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use anyhow::{anyhow, bail, ensure, Context, Result};
-use perifrac_io::{atomic_write, read_ply_frame, write_povray_mesh2, SurfaceRef};
+use perifrac_io::{atomic_write, read_ply_frame, read_ply_points, write_povray_mesh2, SurfaceRef};
 use perifrac_physics::math::{add, cross, dot, norm, scale, sub};
 use perifrac_scene::output::{BallJson as Ball, Bounds, GroundJson as Ground};
 use perifrac_scene::{POVRAY_MESH_NAME as MESH_NAME, RUN_FORMAT};
@@ -101,6 +101,15 @@ struct Frame {
     /// Bounds of the heaviest fragments (90% of the mass); preferred for framing.
     #[serde(default)]
     main_bounds: Option<Bounds>,
+    /// Small pieces written as points instead of surfaces.
+    #[serde(default)]
+    debris: Option<DebrisRef>,
+}
+
+/// A frame's debris file in [`Frame`].
+#[derive(Deserialize, Debug)]
+struct DebrisRef {
+    path: PathBuf,
 }
 
 /// Where the camera is and what it looks at, in data coordinates.
@@ -144,7 +153,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let mut scenes = Vec::with_capacity(selected.len());
     for frame in &selected {
         let include = frame_include(dir, &render_dir, frame)?;
-        let scene = scene_text(&run, frame, &view, &include, args);
+        let debris = frame_debris(dir, frame)?;
+        let scene = scene_text(&run, frame, &view, &include, &debris, args);
         let pov = render_dir.join(format!("frame_{:04}.pov", frame.index));
         atomic_write(&pov, |w| w.write_all(scene.as_bytes()))?;
         scenes.push((*frame, pov));
@@ -418,6 +428,36 @@ fn frame_include(dir: &Path, render_dir: &Path, frame: &Frame) -> Result<String>
     Ok(name)
 }
 
+/// The frame's debris as balls (centre, radius; m), none when the frame has no debris file.
+fn frame_debris(dir: &Path, frame: &Frame) -> Result<Vec<([f64; 3], f64)>> {
+    let Some(debris) = &frame.debris else {
+        return Ok(Vec::new());
+    };
+    let path = dir.join(&debris.path);
+    let cloud = read_ply_points(&path)
+        .with_context(|| format!("frame {}: reading the debris", frame.index))?;
+    let radius = cloud.scalar("radius").ok_or_else(|| {
+        anyhow!(
+            "frame {}: debris {} has no radius property",
+            frame.index,
+            path.display()
+        )
+    })?;
+    let balls: Vec<([f64; 3], f64)> = cloud
+        .points
+        .iter()
+        .copied()
+        .zip(radius.iter().copied())
+        .collect();
+    ensure!(
+        balls.iter().all(|(_, r)| r.is_finite() && *r > 0.0),
+        "frame {}: debris {} has a radius that is not positive and finite",
+        frame.index,
+        path.display()
+    );
+    Ok(balls)
+}
+
 /// The path as a POV-Ray string literal body, seen from `render/` (POV-Ray runs there); paths in
 /// run.json are relative to the run directory, one level up.
 fn include_string(path: &Path) -> Result<String> {
@@ -453,6 +493,7 @@ fn scene_text(
     frame: &Frame,
     view: &View,
     include: &str,
+    debris: &[([f64; 3], f64)],
     args: &RenderArgs,
 ) -> String {
     let mut s = String::new();
@@ -531,6 +572,14 @@ fn scene_text(
             pov(b.center),
             b.radius
         );
+    }
+    if !debris.is_empty() {
+        // Pieces too small to be worth a surface: balls of their volume, broken material.
+        let _ = writeln!(w, "union {{");
+        for (c, r) in debris {
+            let _ = writeln!(w, "  sphere {{ {}, {r} }}", pov(*c));
+        }
+        let _ = writeln!(w, "  texture {{ {MESH_NAME}_crack_texture }}\n}}");
     }
     let _ = writeln!(
         w,

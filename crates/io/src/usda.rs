@@ -360,6 +360,13 @@ pub fn write_int_array(out: &mut Vec<u8>, values: impl IntoIterator<Item = i64>)
     });
 }
 
+/// Writes `[a, b, ...]` of floats, each as the shortest text that reads back to it.
+pub fn write_float_array(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>) {
+    write_separated(out, b"[]", values, |o, v| {
+        let _ = write!(o, "{v:?}");
+    });
+}
+
 /// Writes `(x, y, z)` of doubles.
 pub fn write_double3(out: &mut Vec<u8>, v: [f64; 3]) {
     let _ = write!(out, "({:?}, {:?}, {:?})", v[0], v[1], v[2]);

@@ -22,6 +22,7 @@
 
 pub mod budget;
 pub mod checkpoint;
+pub mod debris;
 pub mod driver;
 pub mod error;
 pub mod fragments;

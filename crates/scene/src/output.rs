@@ -6,8 +6,11 @@
 //! copy, so that welding by it gives every piece's closed 2-manifold surface; faces with
 //! their `crack` flag and stable `fragment` id, see [`crate::fragments`]), optionally
 //! `surface_NNNN.inc` (POV-Ray `mesh2` with normals, declaring [`POVRAY_MESH_NAME`]) and
-//! `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`). Every file is written to a temporary name and renamed into place, so a reader
-//! never sees half a frame.
+//! `particles_NNNN.ply` (points with `damage`, `mass` and `fragment`) and `debris_NNNN.ply`
+//! (pieces of at most `[output] debris_tets` tets, left out of the surface: points at their
+//! centres of mass with `radius`, velocity `vx vy vz`, `mass` and `fragment`, see
+//! [`crate::debris`]). Every file is written to a temporary name and renamed into place, so a
+//! reader never sees half a frame.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -17,6 +20,7 @@ use perifrac_io::{write_ply, write_ply_points, write_povray_mesh2, PlyEncoding, 
 use perifrac_topology::Surface;
 use serde::{Deserialize, Serialize};
 
+use crate::debris::{split_debris, Debris};
 use crate::driver::Driver;
 use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
@@ -140,9 +144,12 @@ pub struct FrameJson {
     pub povray: Option<String>,
     /// Particle PLY, when written.
     pub particles: Option<String>,
+    /// Debris points, when the scene writes small pieces as debris.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub debris: Option<DebrisJson>,
     /// Balls at this time.
     pub balls: Vec<BallJson>,
-    /// Bounds of the whole surface (m).
+    /// Bounds of the whole surface and the debris balls (m).
     pub bounds: Bounds,
     /// Bounds of the heaviest fragments making up [`MAIN_MASS_SHARE`] of the mass (m).
     pub main_bounds: Bounds,
@@ -166,6 +173,15 @@ pub struct FrameJson {
     /// overlap so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub self_contact: Option<SelfContactJson>,
+}
+
+/// A frame's debris in `run.json`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct DebrisJson {
+    /// The debris PLY, relative to the run directory.
+    pub path: String,
+    /// Pieces written as debris points (left out of the surface).
+    pub pieces: usize,
 }
 
 /// Contact between particles up to a frame, in `run.json`.
@@ -331,6 +347,23 @@ impl FrameWriter {
         let ids = driver.fragment_ids(&pieces, index);
         let mesh = driver.mesh();
         let mut surface = mesh.surface_of(&pieces);
+        let debris = if self.options.debris_tets > 0 {
+            let volumes = mesh.rest_volumes();
+            let solver = driver.solver();
+            let (keep, debris) = split_debris(
+                &pieces,
+                self.options.debris_tets,
+                &ids,
+                driver.masses(),
+                solver.positions(),
+                solver.velocities(),
+                &volumes,
+            );
+            surface.retain_pieces(&keep);
+            Some(debris)
+        } else {
+            None
+        };
         if let Some(smoothing) = &self.options.smooth_cracks {
             surface.smooth_cracks(smoothing);
         }
@@ -385,8 +418,27 @@ impl FrameWriter {
         } else {
             None
         };
+        let (mut lo, mut hi) = bounds(&surface.vertices);
+        if let Some(d) = &debris {
+            for (p, r) in d.points.iter().zip(&d.radius) {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k] - r);
+                    hi[k] = hi[k].max(p[k] + r);
+                }
+            }
+        }
+        let debris = match &debris {
+            Some(d) => {
+                let path = format!("frames/debris_{index:04}.ply");
+                write_debris(&self.dir.join(&path), d)?;
+                Some(DebrisJson {
+                    path,
+                    pieces: d.points.len(),
+                })
+            }
+            None => None,
+        };
         let piece_mass = piece_masses(&pieces.piece_of_tet, pieces.count, driver.masses());
-        let (lo, hi) = bounds(&surface.vertices);
         let frame = FrameJson {
             index,
             time: driver.solver().time(),
@@ -394,6 +446,7 @@ impl FrameWriter {
             surface: format!("frames/{name}.ply"),
             povray,
             particles,
+            debris,
             balls: driver
                 .colliders()
                 .map(|c| {
@@ -526,6 +579,26 @@ fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
         }
     }
     std::fs::create_dir_all(dir).map_err(|e| err(format!("cannot create: {e}")))?;
+    Ok(())
+}
+
+/// Writes `debris` as a PLY point cloud: `x y z` (m), `radius` (m), `vx vy vz` (m/s), `mass`
+/// (kg), `fragment`.
+fn write_debris(path: &Path, debris: &Debris) -> Result<(), SceneError> {
+    let velocity = |d: usize| -> Vec<f64> { debris.velocity.iter().map(|v| v[d]).collect() };
+    let fragment: Vec<f64> = debris.fragment.iter().map(|&f| f64::from(f)).collect();
+    write_ply_points(
+        path,
+        &debris.points,
+        &[
+            ("radius", &debris.radius),
+            ("vx", &velocity(0)),
+            ("vy", &velocity(1)),
+            ("vz", &velocity(2)),
+            ("mass", &debris.mass),
+            ("fragment", &fragment),
+        ],
+    )?;
     Ok(())
 }
 

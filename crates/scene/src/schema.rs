@@ -54,6 +54,13 @@ pub struct MeshSpec {
     pub height: Option<f64>,
     /// Box cells along x, y, z (6 tets each).
     pub cells: Option<[usize; 3]>,
+    /// How a box is cut into tets: `"unstructured"` (default: a Delaunay mesh of well-spaced
+    /// random points, as many tets as the cells would give, no direction preferred) or
+    /// `"lattice"` (every cell into the same six Kuhn tets).
+    pub structure: Option<String>,
+    /// Seed of an unstructured box's points (default 1): another seed, another mesh of the
+    /// same size.
+    pub seed: Option<u64>,
     /// Cells across the longest side (boxes), or lattice resolution (surfaces, round primitives).
     pub resolution: Option<usize>,
     /// Uniform scale applied to the mesh's coordinates, a file's or a primitive's (before
@@ -305,4 +312,8 @@ pub struct OutputSpec {
     /// Relax the crack faces of every frame's surface towards their local crack plane
     /// (default true; surface only, the physics does not see it).
     pub smooth_cracks: Option<bool>,
+    /// Pieces of at most this many tets are written as debris points
+    /// (`frames/debris_NNNN.ply`) instead of surfaces (default
+    /// [`crate::setup::DEFAULT_DEBRIS_TETS`]; 0 writes every piece as a surface).
+    pub debris_tets: Option<usize>,
 }

@@ -11,6 +11,9 @@
 //!                            faceVertexCounts/Indices, primvars crack, fragment, st and
 //!                            displayColor whenever the topology changes
 //!     outside, crack         GeomSubsets (family materialBind, a partition of the faces)
+//!   debris                   Points (runs that write debris): each frame's small pieces
+//!                            as balls of their volume (points, widths, velocities, extent,
+//!                            primvars fragment), bound to the crack material
 //!   ball_K                   Sphere, translated per frame
 //!   ground_K                 Mesh, a square on the plane
 //!   Looks/outside, Looks/crack   UsdPreviewSurface materials
@@ -29,8 +32,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use perifrac_io::usda::{
-    identifier, quote, write_double3, write_int_array, write_vec2f_array, write_vec3f_array,
-    AttrId, PrimId, UsdaLayer,
+    identifier, quote, write_double3, write_float_array, write_int_array, write_vec2f_array,
+    write_vec3f_array, AttrId, PrimId, UsdaLayer,
 };
 use perifrac_io::{read_ply_frame, read_ply_points, FrameSurface};
 use serde::Deserialize;
@@ -130,6 +133,13 @@ pub fn export_usd(
             _ => None,
         };
         cache.frame(k, &surface, centres.as_ref(), &frame.balls, layout)?;
+        if let Some(prim) = cache.debris.clone() {
+            let cloud = match &frame.debris {
+                Some(d) => read_ply_points(&dir.join(&d.path))?,
+                None => Default::default(),
+            };
+            cache.debris_frame(&prim, k, &cloud)?;
+        }
     }
     let meshes = cache.finish(layout)?;
     let bytes = std::fs::metadata(&out).map_or(0, |m| m.len());
@@ -164,6 +174,16 @@ struct MeshPrim {
 /// coordinates.
 type Topology = (Vec<[u32; 3]>, Vec<u8>, Vec<u32>, Vec<[f32; 2]>);
 
+/// The debris `Points` prim's time-sampled attributes.
+#[derive(Debug, Clone)]
+struct DebrisPrim {
+    points: AttrId,
+    widths: AttrId,
+    velocities: AttrId,
+    extent: AttrId,
+    fragment: AttrId,
+}
+
 /// A fragment's prim in the pieces layout.
 struct Piece {
     mesh: MeshPrim,
@@ -182,6 +202,8 @@ struct Cache {
     pieces: BTreeMap<u32, Piece>,
     parents: BTreeMap<u32, Option<u32>>,
     balls: Vec<AttrId>,
+    /// The debris points, when any frame has debris.
+    debris: Option<DebrisPrim>,
     /// Velocity factor: playback seconds per simulated second, inverted (s/s).
     speed: f32,
 }
@@ -234,9 +256,13 @@ impl Cache {
             pieces: BTreeMap::new(),
             parents: m.fragments.iter().map(|b| (b.id, b.parent)).collect(),
             balls: Vec::new(),
+            debris: None,
             speed: speed as f32,
         };
         cache.static_prims(m)?;
+        if m.frames.iter().any(|f| f.debris.is_some()) {
+            cache.debris = Some(cache.debris_prim()?);
+        }
         Ok(cache)
     }
 
@@ -312,6 +338,77 @@ impl Cache {
                 &format!("float3[] extent = {}", String::from_utf8_lossy(&ext)),
             );
         }
+        Ok(())
+    }
+
+    /// The `debris` Points prim, bound to the crack material.
+    fn debris_prim(&mut self) -> Result<DebrisPrim, SceneError> {
+        let layer = &mut self.layer;
+        let prim = layer.prim(Some(self.root), "Points", "debris")?;
+        layer.prim_metadata(prim, "prepend apiSchemas = [\"MaterialBindingAPI\"]");
+        layer.property(
+            prim,
+            &format!("rel material:binding = <{}/crack>", self.looks),
+        );
+        layer.property(
+            prim,
+            &format!(
+                "color3f[] primvars:displayColor = [({}, {}, {})] (\n        interpolation = \"constant\"\n    )",
+                CRACK_RGB[0], CRACK_RGB[1], CRACK_RGB[2]
+            ),
+        );
+        let vertex = ["interpolation = \"vertex\""];
+        Ok(DebrisPrim {
+            points: layer.sampled(prim, "point3f[] points", &[]),
+            widths: layer.sampled(prim, "float[] widths", &vertex),
+            velocities: layer.sampled(prim, "vector3f[] velocities", &[]),
+            extent: layer.sampled(prim, "float3[] extent", &[]),
+            fragment: layer.sampled(prim, "int[] primvars:fragment", &vertex),
+        })
+    }
+
+    /// Frame `k` of the debris: its points with their diameters as widths (an empty cloud when
+    /// the frame has none).
+    fn debris_frame(
+        &mut self,
+        prim: &DebrisPrim,
+        k: usize,
+        cloud: &perifrac_io::PointCloud,
+    ) -> Result<(), SceneError> {
+        let t = k as f64;
+        let n = cloud.points.len();
+        let column = |name: &str| -> Vec<f64> {
+            cloud
+                .scalar(name)
+                .map_or_else(|| vec![0.0; n], <[f64]>::to_vec)
+        };
+        let radius = column("radius");
+        let (vx, vy, vz) = (column("vx"), column("vy"), column("vz"));
+        let fragment = column("fragment");
+        let points: Vec<[f32; 3]> = cloud.points.iter().map(|p| p.map(|c| c as f32)).collect();
+        let velocities: Vec<[f32; 3]> = (0..n)
+            .map(|i| [vx[i], vy[i], vz[i]].map(|c| c as f32 * self.speed))
+            .collect();
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for (p, &r) in points.iter().zip(&radius) {
+            for d in 0..3 {
+                lo[d] = lo[d].min(p[d] - r as f32);
+                hi[d] = hi[d].max(p[d] + r as f32);
+            }
+        }
+        if n == 0 {
+            (lo, hi) = ([0.0; 3], [0.0; 3]);
+        }
+        let layer = &mut self.layer;
+        layer.sample(prim.points, t, |o| write_vec3f_array(o, &points))?;
+        layer.sample(prim.widths, t, |o| {
+            write_float_array(o, radius.iter().map(|&r| 2.0 * r as f32))
+        })?;
+        layer.sample(prim.velocities, t, |o| write_vec3f_array(o, &velocities))?;
+        layer.sample(prim.extent, t, |o| write_vec3f_array(o, &[lo, hi]))?;
+        layer.sample(prim.fragment, t, |o| {
+            write_int_array(o, fragment.iter().map(|&f| f as i64))
+        })?;
         Ok(())
     }
 

@@ -91,8 +91,13 @@ fn fragments_keep_their_ids_from_frame_to_frame() {
             .map(|&f| f as u32)
             .collect();
         let surface = read_ply_frame(&dir.path().join(frame["surface"].as_str().unwrap())).unwrap();
-        let face_ids = surface.fragment.unwrap();
-        // The surface and the particles name the same fragments, as many as run.json counts.
+        let mut face_ids = surface.fragment.unwrap();
+        // The surface with the debris points and the particles name the same fragments, as many
+        // as run.json counts.
+        if let Some(debris) = frame["debris"]["path"].as_str() {
+            let debris = read_ply_points(&dir.path().join(debris)).unwrap();
+            face_ids.extend(debris.scalar("fragment").unwrap().iter().map(|&f| f as u32));
+        }
         let mut a: Vec<u32> = ids.clone();
         a.sort_unstable();
         a.dedup();

@@ -119,7 +119,7 @@ fn orient(
 }
 
 /// Rest-vertex -> tets star in CSR form, tets ascending within each vertex.
-fn build_star(num_vertices: usize, tets: &[[u32; 4]]) -> (Vec<usize>, Vec<u32>) {
+pub(crate) fn build_star(num_vertices: usize, tets: &[[u32; 4]]) -> (Vec<usize>, Vec<u32>) {
     let mut offsets = vec![0usize; num_vertices + 1];
     for tet in tets {
         for &v in tet {

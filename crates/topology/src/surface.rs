@@ -105,6 +105,54 @@ impl Surface {
         }
     }
 
+    /// Keeps the faces of the pieces `keep` marks (indexed by piece id) and the vertices they
+    /// use, renumbered in their old order; midpoints whose vertex or ends go are dropped. Pieces
+    /// share no surface vertex, so every kept piece's surface stays exactly as it was.
+    ///
+    /// Panics if a face's piece id is not an index of `keep`.
+    #[track_caller]
+    pub fn retain_pieces(&mut self, keep: &[bool]) {
+        let mut new_id = vec![u32::MAX; self.vertices.len()];
+        let mut kept_face = 0;
+        for f in 0..self.faces.len() {
+            if !keep[self.piece[f] as usize] {
+                continue;
+            }
+            for &v in &self.faces[f] {
+                new_id[v as usize] = 0;
+            }
+            self.faces[kept_face] = self.faces[f];
+            self.crack[kept_face] = self.crack[f];
+            self.piece[kept_face] = self.piece[f];
+            kept_face += 1;
+        }
+        self.faces.truncate(kept_face);
+        self.crack.truncate(kept_face);
+        self.piece.truncate(kept_face);
+        let mut next = 0u32;
+        for (v, id) in new_id.iter_mut().enumerate() {
+            if *id == 0 {
+                *id = next;
+                self.vertices[next as usize] = self.vertices[v];
+                self.vertex_ids[next as usize] = self.vertex_ids[v];
+                next += 1;
+            }
+        }
+        self.vertices.truncate(next as usize);
+        self.vertex_ids.truncate(next as usize);
+        for face in &mut self.faces {
+            *face = face.map(|v| new_id[v as usize]);
+        }
+        self.midpoints = self
+            .midpoints
+            .iter()
+            .filter_map(|&(m, a, b)| {
+                let [m, a, b] = [m, a, b].map(|v| new_id[v as usize]);
+                (m != u32::MAX && a != u32::MAX && b != u32::MAX).then_some((m, a, b))
+            })
+            .collect();
+    }
+
     /// The faces around each vertex as CSR: vertex `v`'s are `around[start[v]..start[v + 1]]`,
     /// each as (face, corner of the face at `v`), in face order.
     pub(crate) fn faces_around_vertices(&self) -> (Vec<usize>, Vec<(u32, u8)>) {

@@ -4,7 +4,8 @@
 use perifrac_physics::NO_NEIGHBOUR;
 use perifrac_topology::faces::FACE_CORNERS;
 use perifrac_topology::mesher::{
-    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, MesherOptions,
+    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, unstructured_box_data,
+    MesherOptions,
 };
 use perifrac_topology::{primitives, TetMesh, NO_TET};
 
@@ -19,8 +20,13 @@ use super::defaults;
 /// What the scene's object is made from, read and checked but not yet built: a box's counts,
 /// a surface to mesh, or a tet file's arrays.
 enum Source {
-    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids.
-    Box { size: [f64; 3], cells: [usize; 3] },
+    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids: the Kuhn
+    /// lattice, or unstructured tets from points of this seed.
+    Box {
+        size: [f64; 3],
+        cells: [usize; 3],
+        unstructured: Option<u64>,
+    },
     /// A closed surface for the built-in mesher (a round primitive's or a file's).
     Surface {
         vertices: Vec<[f64; 3]>,
@@ -56,6 +62,19 @@ pub(super) fn plan(ctx: &Ctx, scene: &Scene) -> Result<Planned, SceneError> {
     if let Some(r) = m.resolution {
         if r == 0 {
             return Err(ctx.err("mesh.resolution", "must be at least 1"));
+        }
+    }
+    if m.primitive.as_deref() != Some("box") {
+        for (key, given) in [
+            ("mesh.structure", m.structure.is_some()),
+            ("mesh.seed", m.seed.is_some()),
+        ] {
+            if given {
+                return Err(ctx.err(
+                    key,
+                    "only a box primitive takes it (other objects are meshed from their surface)",
+                ));
+            }
         }
     }
     let opts = MesherOptions {
@@ -105,7 +124,32 @@ pub(super) fn plan(ctx: &Ctx, scene: &Scene) -> Result<Planned, SceneError> {
             primitives::check_box([0.0; 3], scaled, cells)
                 .map_err(|e| ctx.err("mesh.size", format!("{size:?} m in {cells:?} cells: {e}")))?;
             let cell: [f64; 3] = std::array::from_fn(|k| scaled[k] / cells[k] as f64);
-            (Source::Box { size, cells }, MeshShape::of_box(cell, counts))
+            let unstructured = match m.structure.as_deref() {
+                None | Some("unstructured") => Some(m.seed.unwrap_or(defaults::MESH_SEED)),
+                Some("lattice") => {
+                    if m.seed.is_some() {
+                        return Err(ctx.err(
+                            "mesh.seed",
+                            "a lattice box has no random points: drop seed or set structure = \"unstructured\"",
+                        ));
+                    }
+                    None
+                }
+                Some(other) => {
+                    return Err(ctx.err(
+                        "mesh.structure",
+                        format!("unknown structure \"{other}\" (known: unstructured, lattice)"),
+                    ))
+                }
+            };
+            (
+                Source::Box {
+                    size,
+                    cells,
+                    unstructured,
+                },
+                MeshShape::of_box(cell, counts),
+            )
         }
         (Some("sphere"), None) => {
             let r = ctx.positive(
@@ -184,7 +228,17 @@ pub(super) fn build(scene: &Scene, planned: Planned) -> Result<TetMesh, SceneErr
     } = planned;
     let mut lines = None;
     let (mut vertices, tets) = match source {
-        Source::Box { size, cells } => primitives::box_data([0.0; 3], size, cells),
+        Source::Box {
+            size,
+            cells,
+            unstructured: None,
+        } => primitives::box_data([0.0; 3], size, cells),
+        Source::Box {
+            size,
+            cells,
+            unstructured: Some(seed),
+        } => unstructured_box_data([0.0; 3], size, cells, seed)
+            .map_err(|e| mesh_err(e.to_string()))?,
         Source::Surface { vertices, faces } => {
             let opts = MesherOptions {
                 edge_length: None,

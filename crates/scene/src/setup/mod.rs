@@ -38,6 +38,8 @@ pub mod defaults {
     pub const FRAMES: usize = 24;
     /// Box cells across the longest side when neither `cells` nor `resolution` is given.
     pub const BOX_RESOLUTION: usize = 20;
+    /// Seed of an unstructured box's points when the scene gives none.
+    pub const MESH_SEED: u64 = 1;
     /// Plastic cap ratio when a yield limit is given without one.
     pub const PLASTIC_CAP: f64 = 0.2;
     /// Contact penalty factor on `E r_p`.
@@ -80,7 +82,14 @@ pub struct OutputOptions {
     /// Relax each frame's crack faces towards their local crack plane, with these settings
     /// (`None`: as cut).
     pub smooth_cracks: Option<perifrac_topology::CrackSmoothing>,
+    /// Pieces of at most this many tets are written as debris points, not surfaces (0: none).
+    pub debris_tets: usize,
 }
+
+/// Pieces of at most this many tets are debris unless the scene says otherwise (`[output]
+/// debris_tets`): chosen from the fragment sizes of `perifrac bench look` (BENCHMARKS.md, "The
+/// look of the cut").
+pub const DEFAULT_DEBRIS_TETS: usize = 3;
 
 /// When a run writes a checkpoint at a frame boundary (an interrupted run always writes one).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -416,5 +425,6 @@ fn output_options(f: &SceneFile) -> OutputOptions {
             .smooth_cracks
             .unwrap_or(true)
             .then(perifrac_topology::CrackSmoothing::default),
+        debris_tets: f.output.debris_tets.unwrap_or(DEFAULT_DEBRIS_TETS),
     }
 }

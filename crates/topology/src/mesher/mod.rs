@@ -5,15 +5,21 @@
 //! where those disagree, their centroid, loose fragments are dropped ([`fragments`]), and the
 //! boundary of what is kept is snapped onto the
 //! surface under a dihedral-angle guard ([`snap`]).
+//!
+//! Separately, [`unstructured`] meshes an axis-aligned box without a lattice: well-spaced points
+//! ([`scatter`]), their Delaunay tetrahedralisation ([`delaunay`]) and sliver removal.
 
 mod bvh;
+pub mod delaunay;
 pub mod fragments;
 pub mod lattice;
 pub mod manifold;
 mod mesh_surface;
+pub mod scatter;
 pub mod shapes;
 pub mod snap;
 pub mod surface_check;
+pub mod unstructured;
 pub mod winding;
 
 pub use fragments::FragmentReport;
@@ -27,4 +33,5 @@ pub use snap::SnapReport;
 pub use surface_check::{
     capped_volume, check_surface, enclosed_volume, CleanSurface, SurfaceProblems,
 };
+pub use unstructured::{unstructured_box_data, UnstructuredError};
 pub use winding::Winding;
