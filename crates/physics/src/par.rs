@@ -47,29 +47,53 @@ pub(crate) fn for_rows_mut<P: Send, B: Send, F>(
 ) where
     F: Fn(usize, &mut [P], &mut [B]) + Sync,
 {
-    split_rows(offsets, 0, per_particle, per_bond, f);
+    // Zero-sized: the second slice costs nothing.
+    let mut none = vec![(); per_particle.len()];
+    split_rows2(
+        offsets,
+        0,
+        per_particle,
+        &mut none,
+        per_bond,
+        &|first, p, _, b| f(first, p, b),
+    );
 }
 
-fn split_rows<P: Send, B: Send, F>(
+/// As [`for_rows_mut`] with two per-particle slices, split alike.
+pub(crate) fn for_rows_mut2<P: Send, Q: Send, B: Send, F>(
     offsets: &[u32],
-    first: usize,
     per_particle: &mut [P],
+    also: &mut [Q],
     per_bond: &mut [B],
     f: &F,
 ) where
-    F: Fn(usize, &mut [P], &mut [B]) + Sync,
+    F: Fn(usize, &mut [P], &mut [Q], &mut [B]) + Sync,
+{
+    split_rows2(offsets, 0, per_particle, also, per_bond, f);
+}
+
+fn split_rows2<P: Send, Q: Send, B: Send, F>(
+    offsets: &[u32],
+    first: usize,
+    per_particle: &mut [P],
+    also: &mut [Q],
+    per_bond: &mut [B],
+    f: &F,
+) where
+    F: Fn(usize, &mut [P], &mut [Q], &mut [B]) + Sync,
 {
     let n = per_particle.len();
     if n <= GRAIN {
-        f(first, per_particle, per_bond);
+        f(first, per_particle, also, per_bond);
         return;
     }
     let mid = n / 2;
     let (pl, pr) = per_particle.split_at_mut(mid);
+    let (ql, qr) = also.split_at_mut(mid);
     let split = (offsets[first + mid] - offsets[first]) as usize;
     let (bl, br) = per_bond.split_at_mut(split);
     rayon::join(
-        || split_rows(offsets, first, pl, bl, f),
-        || split_rows(offsets, first + mid, pr, br, f),
+        || split_rows2(offsets, first, pl, ql, bl, f),
+        || split_rows2(offsets, first + mid, pr, qr, br, f),
     );
 }

@@ -164,8 +164,7 @@ impl<M: ForceModel> Integrator<M> for VelocityVerlet {
             self.drift::<false>(state, loads)?;
         }
         self.broken.clear();
-        model.break_bonds(&state.positions, &mut self.broken);
-        model.update_forces(&state.positions, &mut self.f);
+        model.break_bonds_and_update_forces(&state.positions, &mut self.broken, &mut self.f);
         env.add_forces(External {
             dt: self.dt,
             positions: &state.positions,

@@ -3,8 +3,8 @@
 //! threshold-scaled fracture).
 
 use super::kernel::{
-    dilatation, energy_density, force, return_map, AllAlive, Inputs, Isotropic, Mask, NoPlastic,
-    PerBond, WithPlastic,
+    dilatation, dilatation_breaking, energy_density, force, return_map, AllAlive, Inputs,
+    Isotropic, Mask, NoPlastic, PerBond, WithPlastic,
 };
 use super::same_features;
 use super::{ChenMaterial, ForceModel};
@@ -312,13 +312,55 @@ impl ChenModel {
                 }
             }),
         }
+        self.pressure_pass();
+    }
+
+    /// `pq` from the `(theta, S)` of the last dilatation pass.
+    fn pressure_pass(&mut self) {
+        let s = &self.setup;
         let (a, b, ts) = (&s.coef_a, &s.coef_b, &self.ts);
         let c = &s.c_theta;
-        let k = if moment { 1.0 / 3.0 } else { 0.0 };
+        let k = if s.options.energy_consistent {
+            1.0 / 3.0
+        } else {
+            0.0
+        };
         map_particles(&mut self.pq, |i| {
             let [theta, m] = ts[i];
             [a[i] * theta - k * c[i] * b[i] * m, b[i] * theta / 3.0]
         });
+    }
+
+    /// The damage check and the dilatation pass of an elastic breaking model in one walk over
+    /// the bonds (each bond's extension computed once for both), then `pq`. The same results,
+    /// bit for bit, as [`ForceModel::break_bonds`] followed by the dilatation pass.
+    fn break_and_dilate(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        let s = &self.setup;
+        let Some(damage) = self.damage.as_mut() else {
+            return;
+        };
+        let inp = Inputs {
+            family: s.disc.family(),
+            y,
+            volumes: s.disc.volumes(),
+            c_theta: &s.c_theta,
+        };
+        let delta = s.disc.horizon();
+        let ts = &mut self.ts;
+        with_wd!(@w s, w, {
+            if s.options.energy_consistent {
+                damage.check_with(inp.family, y, delta, NoPlastic, broken, ts, &|i, row, brk| {
+                    let ((theta, m), c) = dilatation_breaking::<_, true>(inp, w, brk, i, row);
+                    ([theta, m], c)
+                })
+            } else {
+                damage.check_with(inp.family, y, delta, NoPlastic, broken, ts, &|i, row, brk| {
+                    let ((theta, m), c) = dilatation_breaking::<_, false>(inp, w, brk, i, row);
+                    ([theta, m], c)
+                })
+            }
+        });
+        self.pressure_pass();
     }
 
     /// Force pass: `forces[i]` (N) from the current `pq`.
@@ -385,6 +427,22 @@ impl ForceModel for ChenModel {
     fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
         self.check_len(y, Some(forces));
         self.dilatation_pass(y, true);
+        self.force_pass(y, forces);
+    }
+
+    fn break_bonds_and_update_forces(
+        &mut self,
+        y: &[Vec3],
+        broken: &mut Vec<(u32, u32)>,
+        forces: &mut [Vec3],
+    ) {
+        if self.damage.is_none() || self.ep.is_some() {
+            self.break_bonds(y, broken);
+            self.update_forces(y, forces);
+            return;
+        }
+        self.check_len(y, Some(forces));
+        self.break_and_dilate(y, broken);
         self.force_pass(y, forces);
     }
 

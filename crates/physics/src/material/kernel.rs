@@ -2,6 +2,7 @@
 //! Each variant is monomorphised, so the elastic loop carries no plastic or fracture branch.
 
 use crate::family::Family;
+use crate::fracture::Breaker;
 use crate::math::{norm, sub, Vec3};
 
 /// Bond weights `omega_ij` (own side) and `omega_ji` (the other side) of bond `k`.
@@ -136,6 +137,50 @@ pub(crate) fn dilatation<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
     }
     let theta = inp.c_theta[i] * acc;
     (theta, u - theta * m / 3.0)
+}
+
+/// [`dilatation`] of an elastic particle fused with the damage check: walks `i`'s own bond
+/// states `row` (1 intact), marks with 2 the intact bonds `brk` breaks at `inp.y` and leaves
+/// them out of the sums, exactly as a check followed by [`dilatation`] would (the same terms in
+/// the same order). Returns `(theta_i, S_i)` and the number of bonds it marked.
+#[inline(always)]
+pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
+    inp: Inputs,
+    w: W,
+    brk: &Breaker,
+    i: usize,
+    row: &mut [u8],
+) -> ((f64, f64), u32) {
+    let fam = inp.family;
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    let range = fam.range(i);
+    let first = range.start;
+    let yi = inp.y[i];
+    let (mut acc, mut u, mut m) = (0.0, 0.0, 0.0);
+    let mut count = 0;
+    for k in range {
+        let state = &mut row[k - first];
+        if *state != 1 {
+            continue;
+        }
+        let j = nb[k] as usize;
+        let r = rl[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        if brk.breaks_elastic(i, j, e) {
+            *state = 2;
+            count += 1;
+            continue;
+        }
+        let wv = w.pair(k, r).0 * inp.volumes[j];
+        acc += wv * e;
+        if MOMENT {
+            u += wv * r * e;
+            m += wv * r * r;
+        }
+    }
+    let theta = inp.c_theta[i] * acc;
+    ((theta, u - theta * m / 3.0), count)
 }
 
 /// Return map of particle `i`'s own bonds (MODEL.md, Plasticity): `ep` is this particle's slice.

@@ -48,6 +48,19 @@ pub trait ForceModel: Send {
     /// `(i, j)`, `i < j`, once each, to `broken`. Models without damage do nothing.
     fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>);
 
+    /// [`ForceModel::break_bonds`] then [`ForceModel::update_forces`] at the same `y`: the
+    /// explicit step's pair, which a model may fuse into fewer walks over the bonds (with the
+    /// same results).
+    fn break_bonds_and_update_forces(
+        &mut self,
+        y: &[Vec3],
+        broken: &mut Vec<(u32, u32)>,
+        forces: &mut [Vec3],
+    ) {
+        self.break_bonds(y, broken);
+        self.update_forces(y, forces);
+    }
+
     /// Per-particle Silling-Askari bound `sqrt(2 rho / sum_j C_ij V_j)` minimised over particles (s).
     fn silling_askari_step(&self) -> f64;
 
@@ -94,6 +107,14 @@ impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
     }
     fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
         (**self).break_bonds(y, broken)
+    }
+    fn break_bonds_and_update_forces(
+        &mut self,
+        y: &[Vec3],
+        broken: &mut Vec<(u32, u32)>,
+        forces: &mut [Vec3],
+    ) {
+        (**self).break_bonds_and_update_forces(y, broken, forces)
     }
     fn silling_askari_step(&self) -> f64 {
         (**self).silling_askari_step()
