@@ -169,8 +169,7 @@ impl Damage {
         }
         let brk = Breaker {
             threshold: &self.threshold,
-            // A serial minimum (tens of microseconds for 1e5 particles): one parallel call
-            // fewer per step.
+            // A serial minimum, one read per particle: one parallel call fewer per step.
             least: self.threshold.iter().cloned().fold(f64::INFINITY, f64::min),
             inv_delta: 1.0 / delta,
         };
@@ -239,8 +238,8 @@ impl Breaker<'_> {
     /// Symmetric: the bond's other end gets the same answer.
     #[inline(always)]
     pub(crate) fn breaks(&self, i: usize, j: usize, e: f64, (epij, epji): (f64, f64)) -> bool {
-        // Non-short-circuit `&` and `|`: the signs of tiny extensions are a coin toss, which a
-        // branch would mispredict half the time.
+        // Non-short-circuit `&` and `|`: the signs of tiny extensions go either way from bond
+        // to bond, which a branch would follow badly.
         (e > 0.0)
             & (((e - epij) * self.inv_delta > self.threshold[i])
                 | ((e - epji) * self.inv_delta > self.threshold[j]))

@@ -140,14 +140,7 @@ pub fn in_sphere(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3], e: [f64; 3]
 fn insertion_order(points: &[[f64; 3]]) -> Vec<u32> {
     const BITS: u32 = 10;
     const ROUNDS: u32 = 12;
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-    }
+    let (lo, hi) = super::point_bounds(points.iter().copied());
     let scale = (0..3).fold(0.0f64, |s, d| s.max(hi[d] - lo[d]));
     let cells = (1u32 << BITS) as f64;
     let factor = if scale > 0.0 { cells / scale } else { 0.0 };

@@ -287,18 +287,7 @@ fn validate(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<(), MesherError
 
 /// Bounding box of the vertices used by faces.
 fn bounds(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for f in faces {
-        for &v in f {
-            let p = vertices[v as usize];
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-    }
-    (lo, hi)
+    super::point_bounds(faces.iter().flatten().map(|&v| vertices[v as usize]))
 }
 
 /// Lattice spacing from the options, or for about [`DEFAULT_TARGET_TETS`] tets (a BCC cell of
