@@ -43,7 +43,7 @@ pub enum BenchError {
     #[error("unknown accuracy case {0:?}; the cases are {cases}", cases = crate::accuracy::CASES.join(", "))]
     UnknownCase(String),
     /// A thread pool could not be built.
-    #[error("a one-thread pool: {message}")]
+    #[error("a thread pool: {message}")]
     Threads {
         /// What went wrong.
         message: String,

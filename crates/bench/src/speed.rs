@@ -17,8 +17,10 @@ use crate::table::Table;
 use crate::{BenchError, Effort};
 
 mod implicit;
+mod lammps;
 
 pub use implicit::implicit_step;
+pub use lammps::{lammps_match, lammps_side_by_side, FLOOR_NOTE};
 
 /// A material path of the Chen model.
 #[derive(Debug, Clone, Copy)]
@@ -120,14 +122,18 @@ fn moving_block(
     Ok((s, bonds))
 }
 
-fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, BenchError> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+/// A rayon pool of `threads` workers.
+fn pool(threads: usize) -> Result<rayon::ThreadPool, BenchError> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
         .build()
         .map_err(|e| BenchError::Threads {
             message: e.to_string(),
-        })?;
-    Ok(pool.install(f))
+        })
+}
+
+fn one_thread<T: Send>(f: impl FnOnce() -> T + Send) -> Result<T, BenchError> {
+    Ok(pool(1)?.install(f))
 }
 
 /// Bond updates per second of every material path, on one thread and on the global pool, and

@@ -10,7 +10,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use perifrac_physics::{
-    max_frequency, ChenMaterial, ChenModel, Explicit, FractureParams, Loads, Solver, TimeStep, Vec3,
+    stable_frequency, ChenMaterial, ChenModel, Explicit, FractureParams, Loads, Solver, TimeStep,
+    Vec3,
 };
 use perifrac_scene::{Scene, Setup};
 use perifrac_topology::primitives::box_data;
@@ -227,15 +228,16 @@ fn step_factor(factor: f64, cells: [usize; 3], steps: u64) -> Result<CaseResult,
     let size = cells.map(|c| c as f64 * 0.01);
     let mut b = block(&name, size, cells, 1.5, &steel())?;
     let (rest, horizon) = (b.rest().to_vec(), b.horizon());
-    let est = max_frequency(&mut b.model, &rest, horizon, 100, 1e-5);
+    let (_, est) = stable_frequency(&mut b.model, &rest, horizon);
     let dt = factor * est.critical_step();
     let n = rest.len();
     let mut s = b.solver_at(&name, Loads::new(n), TimeStep::Fixed(dt))?;
     s.velocities_mut().copy_from_slice(&noise(n, 0.1));
     let note = format!(
-        "estimate {:.3e} s ({} power iterations); steel block of {n} particles, random velocities",
+        "estimate {:.3e} s (Lanczos, {} force evaluations); steel block of {n} particles, random \
+         velocities",
         est.critical_step(),
-        est.iterations
+        est.evaluations
     );
     Ok(drive(&name, s, steps, false, note, started))
 }

@@ -158,6 +158,43 @@ fn speed_tables_hold_positive_rates() {
 }
 
 #[test]
+fn lammps_side_by_side_has_perifrac_rows_and_lammps_rows_when_installed() {
+    let (t, skipped, floor) = speed::lammps_side_by_side(Effort::Tiny, &mut |_| {}).unwrap();
+    let ours: Vec<_> = t.rows.iter().filter(|r| r[2] == "perifrac").collect();
+    // elastic and brittle, on one core and on two
+    assert_eq!(ours.len(), 4);
+    assert_eq!(floor.rows.len(), 4);
+    for row in &ours {
+        // the tiny cube: 6^3 Kuhn cells
+        assert_eq!(row[3], "1296", "{row:?}");
+        let rate: f64 = row[6].parse().unwrap();
+        let setup: f64 = row[7].parse().unwrap();
+        let whole: f64 = row[8].parse().unwrap();
+        assert!(rate > 0.0 && setup > 0.0 && whole > setup, "{row:?}");
+    }
+    let theirs: Vec<_> = t
+        .rows
+        .iter()
+        .filter(|r| r[2].starts_with("peri/"))
+        .collect();
+    if skipped.is_empty() {
+        assert_eq!(theirs.len(), 4, "{:?}", t.rows);
+        for row in &theirs {
+            // 11^3 lattice sites, the nearest cube to 1296
+            assert_eq!(row[3], "1331", "{row:?}");
+            let bonds: f64 = row[4].parse().unwrap();
+            assert!(bonds > 0.0, "{row:?}");
+        }
+    } else {
+        assert!(skipped.contains("LAMMPS"), "{skipped}");
+    }
+    for row in &floor.rows {
+        let gbs: f64 = row[2].parse().unwrap();
+        assert!(gbs > 0.0, "{row:?}");
+    }
+}
+
+#[test]
 fn plots_are_written_as_png() {
     if !perifrac_bench::FONT_PATHS
         .iter()

@@ -233,6 +233,7 @@ fn speed_report(c: &Common) -> Result<()> {
     let wall = speed::glass_wall(e, &mut progress)?;
     let share = speed::fracture_share(e, &mut progress)?;
     let implicit = speed::implicit_step(e, &mut progress)?;
+    let (side, skipped, floor) = speed::lammps_side_by_side(e, &mut progress)?;
     let mut md = report.header("speed");
     md.push_str("## Bond-update rate per material path\n\n");
     md.push_str(&paths.to_markdown());
@@ -242,6 +243,17 @@ fn speed_report(c: &Common) -> Result<()> {
     md.push_str(&share.to_markdown());
     md.push_str("\n## The implicit step (Xu's model, one step per 1/24 s frame)\n\n");
     md.push_str(&implicit.to_markdown());
+    md.push_str("\n## Side by side with LAMMPS's PERI package\n\n");
+    md.push_str(&speed::lammps_match(e));
+    md.push_str("\n\n");
+    if !skipped.is_empty() {
+        md.push_str(&format!("{skipped}\n\n"));
+    }
+    md.push_str(&side.to_markdown());
+    md.push_str("\n## Distance from the memory-bandwidth floor\n\n");
+    md.push_str(speed::FLOOR_NOTE);
+    md.push_str("\n\n");
+    md.push_str(&floor.to_markdown());
     report.write("speed", &md)?;
     Ok(())
 }

@@ -133,7 +133,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
     eprintln!(
         "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
          (explicit stable limit {:.3e} s{}), {} frames of {} steps, {} on {threads} \
-         thread(s), setup {:.2} s",
+         thread(s), setup {:.2} s (mesh {:.2}, bond families {:.2}, model {:.2}, stable step \
+         {:.2})",
         scene.path.display(),
         info.particles,
         info.bonds,
@@ -150,7 +151,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
         frames,
         setup.steps_per_frame,
         info.estimate,
-        started.elapsed().as_secs_f64()
+        started.elapsed().as_secs_f64(),
+        info.times.mesh.as_secs_f64(),
+        info.times.families.as_secs_f64(),
+        info.times.model.as_secs_f64(),
+        info.times.stable_step.as_secs_f64(),
     );
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let mut bar = Bar::new(interactive, interrupt_flag()?);

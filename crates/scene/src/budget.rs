@@ -14,7 +14,7 @@ use std::fmt;
 /// the topology mesh (tets, face neighbours, crack flags, vertex stars: about 50 B), its
 /// face hash map while it is built (up to about 100 B), the setup's barycentres, volumes,
 /// adjacency and radii (about 60 B), the solver's per-particle arrays (positions, velocities,
-/// forces, rest state, masses, power-iteration vectors: about 250 B) and the output's
+/// forces, rest state, masses, stable-step iteration vectors: about 250 B) and the output's
 /// per-particle scalars.
 pub const BYTES_PER_PARTICLE: u64 = 600;
 

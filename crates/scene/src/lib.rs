@@ -44,5 +44,5 @@ pub use output::{
     SolverJson, POVRAY_MESH_NAME, RUN_FORMAT,
 };
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
-pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo};
+pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo, SetupTimes};
 pub use usd::{export_usd, UsdLayout, UsdReport, DEFAULT_FPS};

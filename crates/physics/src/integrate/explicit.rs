@@ -22,10 +22,10 @@ use rayon::prelude::*;
 pub enum TimeStep {
     /// A fixed step (s).
     Fixed(f64),
-    /// `safety * 2 / omega_max` from power iteration at the rest shape (at most 100 iterations,
-    /// two force evaluations each, stopping at a 1e-5 relative change); the Silling-Askari bound
-    /// times `safety` if the iteration fails. The estimate converges from below, so keep
-    /// `safety` under 1 (0.9 is measured stable, see tests/dynamics.rs).
+    /// `safety * 2 / omega_max` from Lanczos at the rest shape ([`crate::stable_frequency`]:
+    /// one force evaluation per iteration, stopping at a 1e-6 relative change); the
+    /// Silling-Askari bound times `safety` if the iteration fails. The estimate converges from
+    /// below, so keep `safety` under 1 (0.9 is measured stable, see tests/dynamics.rs).
     Auto {
         /// Fraction of the estimated limit, e.g. 0.8.
         safety: f64,
@@ -130,7 +130,7 @@ impl<M: ForceModel> Simulation<M, VelocityVerlet> {
         self.step_in(&mut ForcesOnly(external))
     }
 
-    /// The power-iteration estimate, when `dt` was `Auto`.
+    /// The stable-step estimate, when `dt` was `Auto`.
     pub fn estimate(&self) -> Option<FrequencyEstimate> {
         self.integrator.estimate
     }

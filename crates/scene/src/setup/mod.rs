@@ -16,6 +16,7 @@ mod step;
 mod xu_material;
 
 use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
 use perifrac_physics::{Discretization, PhysicsError};
 
@@ -50,7 +51,7 @@ pub mod defaults {
     pub const FRICTION: f64 = 0.5;
     /// Facets around the round primitives' surfaces before meshing.
     pub const ROUND_SEGMENTS: usize = 64;
-    /// A fixed step may be at most this fraction of the estimated limit: the power iteration
+    /// A fixed step may be at most this fraction of the estimated limit: the Lanczos estimate
     /// converges from below, so the estimate itself is not a safe step.
     pub const MAX_FIXED_FRACTION: f64 = 0.95;
     /// The blow-up guard: a step that moves a particle further than this fraction of the
@@ -140,6 +141,24 @@ pub struct SetupInfo {
     /// The work estimate the run was checked against: memory from the counted bonds, steps,
     /// output and wall time.
     pub estimate: WorkEstimate,
+    /// Wall time of the setup's stages.
+    pub times: SetupTimes,
+}
+
+/// Wall time of the setup's stages (not written to `run.json`: two runs of one scene write
+/// identical files).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SetupTimes {
+    /// The mesh: built or read, materials assigned by region, precracks cut.
+    pub mesh: Duration,
+    /// The bond families (neighbour walk, symmetrisation, rest lengths).
+    pub families: Duration,
+    /// The force model: per-bond state, weights, shape tensors.
+    pub model: Duration,
+    /// The stable-step estimate.
+    pub stable_step: Duration,
+    /// The whole setup, the stages above included.
+    pub total: Duration,
 }
 
 /// A scene ready to run.
@@ -179,6 +198,8 @@ impl Setup {
         frames: Option<usize>,
         limits: &Limits,
     ) -> Result<Setup, SceneError> {
+        let started = Instant::now();
+        let mut times = SetupTimes::default();
         let ctx = Ctx { file: &scene.path };
         let too_large = |message: String| SceneError::TooLarge {
             file: scene.path.clone(),
@@ -220,6 +241,7 @@ impl Setup {
                 implicit,
             ))
             .map_err(too_large)?;
+        let stage = Instant::now();
         let mut mesh = mesh::build(scene, planned)?;
         let rest = mesh.rest_barycentres();
         let volumes = mesh.rest_volumes();
@@ -237,10 +259,15 @@ impl Setup {
 
         let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
+        times.mesh = stage.elapsed();
+        let stage = Instant::now();
         let (mut disc, report) =
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
         disc.set_materials(&ids).map_err(physics)?;
+        times.families = stage.elapsed();
+        let stage = Instant::now();
         let mut model = solver::model(&ctx, sim, disc, &materials)?;
+        times.model = stage.elapsed();
         let mut estimate = estimate.with_bonds(report.bonds as u64, implicit);
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
@@ -283,7 +310,7 @@ impl Setup {
         };
         let travel_limit = travel(travel_fraction);
         // A fixed step, or "auto"'s bound by the travel limit, already gives a least step
-        // count: refused before the stable step's power iteration when that passes the budget.
+        // count: refused before the stable step's estimate when that passes the budget.
         let (early_dt, why) = match step::fixed_step(&ctx, sim)? {
             Some(dt) => (dt, format!("dt = {} s", check::show(dt))),
             None => (
@@ -301,7 +328,9 @@ impl Setup {
                 &format!("{frames} frame(s) of at least {at_least} steps: {why}"),
             )
             .map_err(too_large)?;
+        let stage = Instant::now();
         let dt_limit = step::stable_limit(model.as_dyn(), &rest, horizon, contact);
+        times.stable_step = stage.elapsed();
         let dt_wanted = match kind {
             solver::Kind::Explicit => step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
             solver::Kind::Implicit => step::implicit_step(&ctx, sim, frames, travel_limit)?,
@@ -369,6 +398,7 @@ impl Setup {
         let mut solver = solver::build(&ctx, sim, kind, model, start)?;
         solver.velocities_mut().copy_from_slice(&velocities);
 
+        times.total = started.elapsed();
         let info = SetupInfo {
             particles: rest.len(),
             bonds: report.bonds,
@@ -384,6 +414,7 @@ impl Setup {
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
             estimate,
+            times,
         };
         let driver = Driver::new(
             mesh,

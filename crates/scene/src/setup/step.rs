@@ -13,7 +13,7 @@ use super::colliders::ContactStiffness;
 use super::defaults;
 
 /// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
-/// (power iteration on the linearised forces at `rest`, Silling-Askari when it fails), all
+/// (Lanczos on the linearised forces at `rest`, Silling-Askari when it fails), all
 /// collider springs on the particle that rings fastest on them, the fastest dynamic ball on
 /// the particles it touches and contact between particles (see [`ContactStiffness`]).
 pub(super) fn stable_limit(
