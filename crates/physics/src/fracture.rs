@@ -116,6 +116,9 @@ impl Damage {
         broken: &mut Vec<(u32, u32)>,
     ) {
         let mut none = vec![(); family.len()];
+        // (e - ep) <= (e - floor) for every plastic extension ep, also in floating point, so a
+        // bond whose (e - floor) is below the least threshold cannot break.
+        let floor = p.floor();
         self.check_with(family, y, delta, p, broken, &mut none, &|i, row, brk| {
             let first = family.range(i).start;
             let yi = y[i];
@@ -126,8 +129,8 @@ impl Damage {
                 }
                 let j = family.neighbours()[k] as usize;
                 let e = norm(sub(y[j], yi)) - family.rest_lengths()[k];
-                // Compressed bonds skip the plastic extensions' loads (one of them a gather).
-                if e > 0.0 && brk.breaks(i, j, e, p.pair(k)) {
+                // Bonds far from breaking skip the plastic extensions' loads (one a gather).
+                if brk.near(e - floor) && brk.breaks(i, j, e, p.pair(k)) {
                     row[k - first] = 2;
                     count += 1;
                 }
@@ -250,6 +253,13 @@ impl Breaker<'_> {
     /// thresholds' loads nor a branch that could go either way.
     #[inline(always)]
     pub(crate) fn breaks_elastic(&self, i: usize, j: usize, e: f64) -> bool {
-        e * self.inv_delta > self.least && self.breaks(i, j, e, (0.0, 0.0))
+        self.near(e) && self.breaks(i, j, e, (0.0, 0.0))
+    }
+
+    /// Whether a stretch of `e` (m), an upper bound on a bond's elastic extension, passes the
+    /// least threshold: if not, the bond cannot break.
+    #[inline(always)]
+    pub(crate) fn near(&self, e: f64) -> bool {
+        e * self.inv_delta > self.least
     }
 }

@@ -201,3 +201,70 @@ fn fused_check_and_forces_match_check_then_forces_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn ductile_check_matches_the_criterion_bond_by_bond() {
+    // The check skips bonds whose stretch, less the least plastic extension, stays under the
+    // least threshold; plastic extensions of both signs (some compressive ones large enough to
+    // break bonds under a small stretch) must give exactly the bonds the criterion names.
+    use perifrac_physics::{ForceModel, YieldParams};
+    let (disc, _, _) = block([0.06, 0.03, 0.03], [6, 3, 3], 1.5);
+    let x = disc.rest_positions().to_vec();
+    let delta = disc.horizon();
+    let s_crit = 2e-3;
+    let mut material = brittle(s_crit, 0.0);
+    material.plasticity = Some(YieldParams {
+        psi0: 1e30,
+        gamma_ratio: 0.2,
+    });
+    let model = ChenModel::new(disc.clone(), &[material]).unwrap();
+    let fam = disc.family();
+    for stretch in [0.0, 1e-3, 3e-3] {
+        let mut m = model.clone();
+        // deterministic extensions in [-2, 1] s_crit delta: about a sixth of them past
+        // -s_crit delta, so those bonds break at any positive extension
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        for ep in m.plastic_extension_mut().unwrap() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            *ep = (3.0 * u - 2.0) * s_crit * delta;
+        }
+        let ep = m.plastic_extension().unwrap().to_vec();
+        let rev = fam.reverse_index();
+        let y: Vec<_> = x
+            .iter()
+            .map(|p| {
+                [
+                    p[0] * (1.0 + stretch),
+                    p[1] + 1e-4 * (90.0 * p[0]).sin(),
+                    p[2],
+                ]
+            })
+            .collect();
+        let mut want = BTreeSet::new();
+        for i in 0..fam.len() {
+            for k in fam.range(i) {
+                let j = fam.neighbours()[k] as usize;
+                let d = [y[j][0] - y[i][0], y[j][1] - y[i][1], y[j][2] - y[i][2]];
+                let e = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() - fam.rest_lengths()[k];
+                let (a, b) = (ep[k], ep[rev[k] as usize]);
+                if e > 0.0 && ((e - a) / delta > s_crit || (e - b) / delta > s_crit) {
+                    want.insert((i.min(j) as u32, i.max(j) as u32));
+                }
+            }
+        }
+        let mut got = Vec::new();
+        m.break_bonds(&y, &mut got);
+        let got: BTreeSet<_> = got.into_iter().collect();
+        assert_eq!(got, want, "stretch {stretch}");
+        if stretch > 0.0 {
+            assert!(
+                !want.is_empty() && want.len() < fam.num_bonds() / 2,
+                "{}",
+                want.len()
+            );
+        }
+    }
+}

@@ -41,6 +41,8 @@ impl Weights for PerBond<'_> {
 /// Plastic extensions `ep_ij`, `ep_ji` of bond `k`.
 pub(crate) trait Plastic: Sync + Copy {
     fn pair(&self, k: usize) -> (f64, f64);
+    /// A lower bound on every plastic extension, at most 0 (m).
+    fn floor(&self) -> f64;
 }
 
 /// Elastic material: no plastic extension.
@@ -51,6 +53,10 @@ impl Plastic for NoPlastic {
     #[inline(always)]
     fn pair(&self, _k: usize) -> (f64, f64) {
         (0.0, 0.0)
+    }
+
+    fn floor(&self) -> f64 {
+        0.0
     }
 }
 
@@ -65,6 +71,24 @@ impl Plastic for WithPlastic<'_> {
     #[inline(always)]
     fn pair(&self, k: usize) -> (f64, f64) {
         (self.ep[k], self.ep[self.rev[k] as usize])
+    }
+
+    /// The least plastic extension and 0: one serial pass over the bonds' 8 bytes.
+    fn floor(&self) -> f64 {
+        // Eight running minima: a single one chains every comparison on the last.
+        let mut lanes = [0.0f64; 8];
+        let chunks = self.ep.chunks_exact(8);
+        let rest = chunks.remainder();
+        for c in chunks {
+            for (l, &e) in lanes.iter_mut().zip(c) {
+                *l = if e < *l { e } else { *l };
+            }
+        }
+        let mut least = rest.iter().fold(0.0f64, |a, &e| if e < a { e } else { a });
+        for l in lanes {
+            least = if l < least { l } else { least };
+        }
+        least
     }
 }
 
