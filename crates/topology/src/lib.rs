@@ -30,6 +30,7 @@ mod surface;
 pub use build::VOLUME_TOLERANCE;
 pub use error::TopologyError;
 pub use mesh::{BuildReport, TetMesh, NO_TET};
+pub use mesher::point_bounds;
 pub use pieces::Pieces;
 pub use quality::{dihedral_angles_deg, radius_ratio, Quality};
 pub use rigid::RIGID_PIECE_TETS;

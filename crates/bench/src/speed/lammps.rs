@@ -59,8 +59,9 @@ fn sizes(effort: Effort) -> (usize, usize) {
 /// How the floor table is computed, for the report.
 pub const FLOOR_NOTE: &str = "The triad `a = b + s c` over arrays far larger than the caches \
     (24 bytes an element, the best of five passes) measures the memory bandwidth on one thread \
-    and on all. The floor of a step is the time to stream the model's per-bond arrays twice \
-    (Chen's step makes two passes over the bonds: dilatation, then forces) at that bandwidth; \
+    and on all. The floor of a step is the time to stream the model's arrays twice (Chen's step \
+    makes two passes over the bonds: dilatation, then forces; the per-bond arrays are nearly all \
+    of the model's memory) at that bandwidth; \
     gathers of neighbours' positions are not counted, so the floor is optimistic.";
 
 /// Steps of every run.
@@ -152,7 +153,7 @@ pub fn lammps_side_by_side(
         "path",
         "cores",
         "triad bandwidth (GB/s)",
-        "bond bytes streamed per step (MB)",
+        "model bytes streamed per step (MB)",
         "floor (s/step)",
         "perifrac (s/step)",
         "x floor",
@@ -264,8 +265,8 @@ fn peer(case: &str, message: String) -> BenchError {
 }
 
 /// Runs the cube through `perifrac run`'s path on `threads` threads; returns its figures and
-/// the bytes of bond arrays one step streams (two passes, dilatation and forces, over the
-/// model's per-bond arrays).
+/// the bytes one step streams by the floor's count: two passes (dilatation and forces) over the
+/// model's arrays ([`perifrac_physics::ForceModel::memory_bytes`]).
 fn perifrac_cube(
     path: CubePath,
     cells: usize,

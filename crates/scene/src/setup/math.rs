@@ -4,15 +4,7 @@ use perifrac_physics::math::norm;
 
 /// Axis-aligned bounds of `points` (infinite, inverted bounds when empty).
 pub(crate) fn bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    (lo, hi)
+    perifrac_topology::point_bounds(points.iter().copied())
 }
 
 /// World up: opposite gravity, +z without gravity.

@@ -37,7 +37,7 @@ pub use unstructured::{unstructured_box_data, UnstructuredError};
 pub use winding::Winding;
 
 /// Smallest and largest coordinates (m) of `points`; infinities of the wrong sign when empty.
-pub(crate) fn point_bounds(points: impl IntoIterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
+pub fn point_bounds(points: impl IntoIterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in points {
