@@ -60,5 +60,7 @@ pub use material::{
 };
 pub use math::{Real, Vec3};
 pub use particles::Discretization;
-pub use stable_step::{lanczos_frequency, max_frequency, stable_frequency, FrequencyEstimate};
+pub use stable_step::{
+    lanczos_frequency, lanczos_frequency_of, max_frequency, stable_frequency, FrequencyEstimate,
+};
 pub use state::State;

@@ -171,16 +171,37 @@ pub fn lanczos_frequency(
     max_iterations: usize,
     tolerance: f64,
 ) -> FrequencyEstimate {
-    let n = y0.len();
     let mass = model.masses().to_vec();
+    lanczos_frequency_of(
+        &mass,
+        y0,
+        length,
+        max_iterations,
+        tolerance,
+        &mut |y: &[Vec3], f: &mut [Vec3]| model.trial_forces(y, f),
+    )
+}
+
+/// [`lanczos_frequency`] for any system of point masses `mass` (kg) whose forces (N) at
+/// positions `y` (m) `forces(y, f)` writes into `f` (a thin shell's, say): the same iteration,
+/// linearised at `y0`.
+pub fn lanczos_frequency_of(
+    mass: &[f64],
+    y0: &[Vec3],
+    length: f64,
+    max_iterations: usize,
+    tolerance: f64,
+    forces: &mut dyn FnMut(&[Vec3], &mut [Vec3]),
+) -> FrequencyEstimate {
+    let n = y0.len();
     let mut q = start_vector(n);
-    let s = 1.0 / mass_norm(&q, &mass);
+    let s = 1.0 / mass_norm(&q, mass);
     scale(&mut q, s);
     // `w` holds the previous Lanczos vector until it is overwritten by the next residual
     let mut w = vec![[0.0; 3]; n];
     let mut y = y0.to_vec();
     let (mut f0, mut f) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
-    model.trial_forces(y0, &mut f0);
+    forces(y0, &mut f0);
     let (mut alphas, mut betas) = (Vec::new(), Vec::new());
     let (mut theta, mut beta) = (0.0, 0.0);
     let mut change = f64::INFINITY;
@@ -193,7 +214,7 @@ pub fn lanczos_frequency(
         for i in 0..n {
             y[i] = axpy(y0[i], h, q[i]);
         }
-        model.trial_forces(&y, &mut f);
+        forces(&y, &mut f);
         // K q into f; alpha = q^T K q
         let mut alpha = 0.0;
         for i in 0..n {
@@ -212,7 +233,7 @@ pub fn lanczos_frequency(
         let new = tridiagonal_max(&alphas, &betas);
         change = ((new - theta) / new).abs();
         theta = new;
-        beta = mass_norm(&w, &mass);
+        beta = mass_norm(&w, mass);
         if change < tolerance || !(beta > 0.0 && beta.is_finite()) {
             break;
         }

@@ -1,0 +1,210 @@
+//! Explicit time stepping of a shell (Newmark with `beta = 0`, `gamma = 1/2`: velocity
+//! Verlet) and the estimate of its stable step.
+
+use crate::error::ShellError;
+use crate::model::ShellModel;
+use perifrac_physics::lanczos_frequency_of;
+use perifrac_physics::math::{axpy, dot, norm, scale, sub, Vec3};
+use perifrac_physics::stable_step::{LANCZOS_ITERATIONS, LANCZOS_TOLERANCE};
+
+/// A shell moving under its elastic forces, gravity and pinned vertices, stepped explicitly.
+#[derive(Debug, Clone)]
+pub struct ExplicitShell {
+    model: ShellModel,
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    f: Vec<Vec3>,
+    pinned: Vec<bool>,
+    gravity: Vec3,
+    damping: f64,
+    elastic: f64,
+    time: f64,
+}
+
+impl ExplicitShell {
+    /// The shell at rest at its mesh's vertices, at time 0, without gravity.
+    pub fn new(mut model: ShellModel) -> Result<ExplicitShell, ShellError> {
+        let x = model.mesh().vertices().to_vec();
+        let n = x.len();
+        let mut f = vec![[0.0; 3]; n];
+        let elastic = model.forces(&x, &mut f)?;
+        Ok(ExplicitShell {
+            model,
+            x,
+            v: vec![[0.0; 3]; n],
+            f,
+            pinned: vec![false; n],
+            gravity: [0.0; 3],
+            damping: 0.0,
+            elastic,
+            time: 0.0,
+        })
+    }
+
+    /// The model.
+    pub fn model(&self) -> &ShellModel {
+        &self.model
+    }
+
+    /// Vertex positions (m).
+    pub fn positions(&self) -> &[Vec3] {
+        &self.x
+    }
+
+    /// Vertex velocities (m/s).
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.v
+    }
+
+    /// Vertex velocities to set (m/s); pinned vertices keep theirs at zero when stepped.
+    pub fn velocities_mut(&mut self) -> &mut [Vec3] {
+        &mut self.v
+    }
+
+    /// Moves the vertices to `x` (m) and evaluates the forces there.
+    pub fn set_positions(&mut self, x: &[Vec3]) -> Result<(), ShellError> {
+        if x.len() != self.x.len() {
+            return Err(ShellError::LengthMismatch {
+                what: "shell positions",
+                expected: self.x.len(),
+                got: x.len(),
+            });
+        }
+        self.x.copy_from_slice(x);
+        self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        Ok(())
+    }
+
+    /// Gravity (m/s^2) on every vertex.
+    pub fn set_gravity(&mut self, g: Vec3) {
+        self.gravity = g;
+    }
+
+    /// Mass-proportional damping `c` (1/s, >= 0): each kick of `h` divides the velocity by
+    /// `1 + c h` after adding the force's impulse.
+    pub fn set_damping(&mut self, c: f64) -> Result<(), ShellError> {
+        if !(c.is_finite() && c >= 0.0) {
+            return Err(ShellError::BadSetting {
+                what: "shell damping (1/s)",
+                expected: "finite and >= 0",
+                value: c,
+            });
+        }
+        self.damping = c;
+        Ok(())
+    }
+
+    /// Holds vertex `i` where it is (and at rest) from now on.
+    pub fn pin(&mut self, i: usize) {
+        if let Some(p) = self.pinned.get_mut(i) {
+            *p = true;
+            self.v[i] = [0.0; 3];
+        }
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Elastic energy (J) at the current positions.
+    pub fn elastic_energy(&self) -> f64 {
+        self.elastic
+    }
+
+    /// Kinetic energy (J).
+    pub fn kinetic_energy(&self) -> f64 {
+        self.model
+            .masses()
+            .iter()
+            .zip(&self.v)
+            .map(|(m, v)| 0.5 * m * dot(*v, *v))
+            .sum()
+    }
+
+    /// Potential energy of gravity (J), zero at the origin.
+    pub fn gravity_energy(&self) -> f64 {
+        self.model
+            .masses()
+            .iter()
+            .zip(&self.x)
+            .map(|(m, x)| -m * dot(self.gravity, *x))
+            .sum()
+    }
+
+    /// One step of `dt` (s): half kick, drift, forces, half kick.
+    pub fn step(&mut self, dt: f64) -> Result<(), ShellError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(ShellError::BadSetting {
+                what: "shell time step (s)",
+                expected: "finite and > 0",
+                value: dt,
+            });
+        }
+        self.kick(0.5 * dt);
+        for ((x, v), &p) in self.x.iter_mut().zip(&self.v).zip(&self.pinned) {
+            if !p {
+                *x = axpy(*x, dt, *v);
+            }
+        }
+        self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        self.kick(0.5 * dt);
+        self.time += dt;
+        Ok(())
+    }
+
+    fn kick(&mut self, h: f64) {
+        let g = self.gravity;
+        let keep = 1.0 / (1.0 + self.damping * h);
+        for (((v, f), &m), &p) in self
+            .v
+            .iter_mut()
+            .zip(&self.f)
+            .zip(self.model.masses())
+            .zip(&self.pinned)
+        {
+            if !p {
+                *v = scale(axpy(axpy(*v, h / m, *f), h, g), keep);
+            }
+        }
+    }
+
+    /// The stable step (s) at the current positions: `2 / omega_max` with the highest angular
+    /// frequency of the free vertices ([`max_frequency`]).
+    pub fn stable_step(&mut self) -> Result<f64, ShellError> {
+        let x = self.x.clone();
+        let w = max_frequency(&mut self.model, &x)?;
+        if w.is_finite() && w > 0.0 {
+            Ok(2.0 / w)
+        } else {
+            Err(ShellError::NoFrequency { omega: w })
+        }
+    }
+}
+
+/// The highest angular frequency (rad/s) of the shell linearised at `x` (m): Lanczos on
+/// `M^-1 K` with `K v` from one-sided differences of the forces
+/// ([`perifrac_physics::lanczos_frequency_of`], with the solids' iteration cap and tolerance).
+/// Pinned vertices are treated as free, which can only raise the estimate: the step stays safe.
+pub fn max_frequency(model: &mut ShellModel, x: &[Vec3]) -> Result<f64, ShellError> {
+    let masses = model.masses().to_vec();
+    model.check_positions(x.len())?;
+    let shortest = model
+        .mesh()
+        .edges()
+        .iter()
+        .map(|e| norm(sub(x[e.v[1] as usize], x[e.v[0] as usize])))
+        .fold(f64::INFINITY, f64::min);
+    let est = lanczos_frequency_of(
+        &masses,
+        x,
+        shortest,
+        LANCZOS_ITERATIONS,
+        LANCZOS_TOLERANCE,
+        &mut |y: &[Vec3], f: &mut [Vec3]| {
+            // The lengths were checked above, so the evaluation cannot fail.
+            let _ = model.forces(y, f);
+        },
+    );
+    Ok(est.omega_max)
+}

@@ -1,0 +1,490 @@
+//! The discrete shell's strains, energy and forces (Gingold et al. 2004, MODEL.md section 8).
+//!
+//! Per triangle, both strains are constant and written in the rest triangle's plane:
+//!
+//! - membrane: the Green strain `E_m` of the affine map from the rest triangle to the current
+//!   one, linear in the changes of the squared edge lengths `s_k = l~_k^2 - l_k^2`
+//!   (`v_k^T E_m v_k = s_k / 2` for each rest edge vector `v_k`);
+//! - bending: `E_c = sum_k dphi_k / (2 A l_k) t_k (x) t_k`, with `t_k` the rest edge `k` turned a
+//!   quarter in the plane, `A` the rest area and `dphi_k = phi(theta~_k) - phi(theta_k)` the
+//!   change of `phi(theta) = 2 tan(theta / 2)` of the dihedral angle at edge `k`; a boundary edge
+//!   has no dihedral angle and adds nothing.
+//!
+//! The energy of a triangle is Koiter's with both strains, its area `A` times
+//! `c_m ((1 - nu) tr E_m^2 + nu (tr E_m)^2) + c_b ((1 - nu) tr E_c^2 + nu (tr E_c)^2)` with
+//! `c_m = Y h / (2 (1 - nu^2))` and `c_b = Y h^3 / (24 (1 - nu^2))`. Since the strains are
+//! linear in `s` and `dphi` with coefficients of the rest state, each part is a quadratic form
+//! whose 3x3 matrix is computed once per triangle. Forces are the exact negative gradient:
+//! the chain rule through `s_k` (an edge's two ends) and `theta_k` (the edge's four-vertex
+//! stencil).
+//!
+//! A force evaluation runs three parallel passes, each writing only its own entries: per edge
+//! (squared length change, dihedral angle and its gradient), per triangle (the energy's
+//! derivatives by `s` and `dphi`), per edge again (summing its triangles' derivatives) and per
+//! vertex (gathering over the edges whose stencil holds it). No locks or atomics, the same sums
+//! for any thread count, no allocation once built.
+
+use rayon::prelude::*;
+
+use crate::error::ShellError;
+use crate::material::ShellMaterial;
+use crate::mesh::{Role, ShellMesh, NONE};
+use perifrac_physics::math::{add, axpy, cross, dot, norm, scale, sub, Vec3};
+
+/// Items per parallel task at least: a small mesh runs its passes on one thread, where waking
+/// others would cost more than the work (the clamped-strip example, up to 369 vertices, took
+/// 42 s with no minimum, 25 s of it in the kernel, and 21 s with it).
+const MIN_PER_TASK: usize = 512;
+
+/// Rest dihedral angles within this of +-pi (rad) are refused: `phi` is infinite there.
+const FOLD_MARGIN: f64 = 1e-3;
+
+/// What a triangle's energy needs of its rest state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FaceRest {
+    /// Rest area (m^2).
+    area: f64,
+    /// `tr(M_k M_l)`, symmetric, as `[00, 11, 22, 01, 02, 12]`, with `E_m = sum_k s_k M_k`
+    /// (1/m^4).
+    mm: [f64; 6],
+    /// `tr M_k` (1/m^2).
+    tm: [f64; 3],
+    /// `tr(N_k N_l)` with `E_c = sum_k dphi_k N_k` (1/m^2).
+    mb: [f64; 6],
+    /// `tr N_k` (1/m).
+    tb: [f64; 3],
+}
+
+/// The strains of one triangle, in its rest plane's frame `(u, w)` with `u` along rest edge
+/// `v0 -> v1`: symmetric 2x2 tensors as `[xx, yy, xy]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaceStrain {
+    /// Membrane (Green) strain (dimensionless).
+    pub membrane: [f64; 3],
+    /// Bending strain, the change of the shape operator (1/m).
+    pub bending: [f64; 3],
+}
+
+/// Per-edge results of a force evaluation.
+#[derive(Debug, Clone, Copy, Default)]
+struct EdgeWork {
+    /// Squared length change `s` (m^2).
+    s: f64,
+    /// `phi(theta) - phi(theta_rest)` (dimensionless); 0 on a boundary.
+    dphi: f64,
+    /// `d phi / d theta`.
+    slope: f64,
+    /// Gradient of `theta` by the stencil's vertices `[v0, v1, opposite0, opposite1]` (1/m).
+    grad: [Vec3; 4],
+    /// `dW / ds` summed over the edge's triangles (J/m^2).
+    g: f64,
+    /// `dW / dtheta` summed over the edge's triangles (J).
+    b: f64,
+}
+
+/// Per-triangle results of a force evaluation.
+#[derive(Debug, Clone, Copy, Default)]
+struct FaceWork {
+    /// `dW / ds_k` (J/m^2).
+    ds: [f64; 3],
+    /// `dW / d dphi_k` (J).
+    dphi: [f64; 3],
+    /// Energy (J).
+    energy: f64,
+}
+
+/// An elastic shell: the mesh, its material, the rest state's per-triangle constants and the
+/// buffers of the force passes.
+#[derive(Debug, Clone)]
+pub struct ShellModel {
+    mesh: ShellMesh,
+    material: ShellMaterial,
+    faces: Vec<FaceRest>,
+    rest_length2: Vec<f64>,
+    rest_phi: Vec<f64>,
+    rest_theta: Vec<f64>,
+    masses: Vec<f64>,
+    edge_work: Vec<EdgeWork>,
+    face_work: Vec<FaceWork>,
+}
+
+/// `phi(theta) = 2 tan(theta / 2)` and its derivative `1 + tan^2(theta / 2)`.
+#[inline]
+pub fn phi(theta: f64) -> (f64, f64) {
+    let t = (0.5 * theta).tan();
+    (2.0 * t, 1.0 + t * t)
+}
+
+/// The signed dihedral angle (rad) at edge `a -> b` between the triangle `(a, b, c0)` and the
+/// triangle `(b, a, c1)`: 0 when flat, positive where the surface turns away from its normal
+/// (a ridge seen from the normal's side), in (-pi, pi]; and its gradient by `[a, b, c0, c1]`
+/// (1/m).
+pub fn dihedral(a: Vec3, b: Vec3, c0: Vec3, c1: Vec3) -> (f64, [Vec3; 4]) {
+    let e = sub(b, a);
+    let le2 = dot(e, e);
+    let le = le2.sqrt();
+    let n0 = cross(e, sub(c0, a));
+    let n1 = cross(sub(c1, a), e);
+    let (q0, q1) = (dot(n0, n0), dot(n1, n1));
+    let sin = dot(cross(n0, n1), e) / le;
+    let cos = dot(n0, n1);
+    let theta = sin.atan2(cos);
+    // Lifting an opposite vertex along its triangle's normal turns the surface towards that
+    // normal: d theta / d c = -|e| n / |n|^2 (minus the unit normal over the triangle's height).
+    let g0 = scale(n0, -le / q0);
+    let g1 = scale(n1, -le / q1);
+    // The edge's ends share the rest by where each opposite vertex projects onto the edge, so
+    // that the four sum to zero (translation) and the angle is unchanged by rotations.
+    let t0 = dot(sub(c0, a), e) / le2;
+    let t1 = dot(sub(c1, a), e) / le2;
+    let ga = add(scale(g0, t0 - 1.0), scale(g1, t1 - 1.0));
+    let gb = add(scale(g0, -t0), scale(g1, -t1));
+    (theta, [ga, gb, g0, g1])
+}
+
+/// The symmetric 2x2 `[xx, yy, xy]` products `tr(A B)`.
+#[inline]
+fn tr_prod(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + 2.0 * a[2] * b[2]
+}
+
+/// `x^T Q x` for a symmetric 3x3 `Q` stored as `[00, 11, 22, 01, 02, 12]`, and `Q x`.
+#[inline]
+fn quad(q: &[f64; 6], x: [f64; 3]) -> (f64, [f64; 3]) {
+    let qx = [
+        q[0] * x[0] + q[3] * x[1] + q[4] * x[2],
+        q[3] * x[0] + q[1] * x[1] + q[5] * x[2],
+        q[4] * x[0] + q[5] * x[1] + q[2] * x[2],
+    ];
+    (x[0] * qx[0] + x[1] * qx[1] + x[2] * qx[2], qx)
+}
+
+/// The rest triangle's edges in its plane: edge `k` runs from vertex `k + 1` to `k + 2`.
+fn plane_edges(p: [Vec3; 3]) -> ([[f64; 2]; 3], f64) {
+    let e01 = sub(p[1], p[0]);
+    let n = cross(e01, sub(p[2], p[0]));
+    let area = 0.5 * norm(n);
+    let u = scale(e01, 1.0 / norm(e01));
+    let w = cross(scale(n, 1.0 / norm(n)), u);
+    let mut v = [[0.0; 2]; 3];
+    for (k, vk) in v.iter_mut().enumerate() {
+        let d = sub(p[(k + 2) % 3], p[(k + 1) % 3]);
+        *vk = [dot(d, u), dot(d, w)];
+    }
+    (v, area)
+}
+
+/// The tensors `M_k` with `E_m = sum_k s_k M_k`, as `[xx, yy, xy]`: the dual basis of the
+/// edge functionals `E -> v_k^T E v_k`, halved (Green strain).
+fn membrane_basis(v: &[[f64; 2]; 3]) -> [[f64; 3]; 3] {
+    // Row k maps [xx, yy, xy] to v_k^T E v_k.
+    let r = v.map(|[x, y]| [x * x, y * y, 2.0 * x * y]);
+    let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
+        - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+        + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+    // Inverse by cofactors; column k of the inverse, halved, is M_k.
+    let c = |i: usize, j: usize| {
+        let (i1, i2) = ((i + 1) % 3, (i + 2) % 3);
+        let (j1, j2) = ((j + 1) % 3, (j + 2) % 3);
+        r[i1][j1] * r[i2][j2] - r[i1][j2] * r[i2][j1]
+    };
+    let mut m = [[0.0; 3]; 3];
+    for (k, mk) in m.iter_mut().enumerate() {
+        for (row, x) in mk.iter_mut().enumerate() {
+            // inverse[row][k] = cofactor(k, row) / det
+            *x = 0.5 * c(k, row) / det;
+        }
+    }
+    m
+}
+
+/// The tensors `N_k = t_k (x) t_k / (2 A l_k)`, as `[xx, yy, xy]` (1/m).
+fn bending_basis(v: &[[f64; 2]; 3], area: f64) -> [[f64; 3]; 3] {
+    v.map(|[x, y]| {
+        let l = (x * x + y * y).sqrt();
+        // t = (-y, x), |t| = l.
+        let c = 1.0 / (2.0 * area * l);
+        [c * y * y, c * x * x, -c * x * y]
+    })
+}
+
+impl ShellModel {
+    /// The shell at rest in the mesh's vertex positions. Refuses a mesh with two triangles
+    /// folded onto each other (rest dihedral angle within 1e-3 rad of 180 degrees).
+    pub fn new(mesh: ShellMesh, material: ShellMaterial) -> Result<ShellModel, ShellError> {
+        let x = mesh.vertices();
+        let mut rest_theta = vec![0.0; mesh.edges().len()];
+        let mut rest_phi = vec![0.0; mesh.edges().len()];
+        let mut rest_length2 = vec![0.0; mesh.edges().len()];
+        for (k, e) in mesh.edges().iter().enumerate() {
+            let d = sub(x[e.v[1] as usize], x[e.v[0] as usize]);
+            rest_length2[k] = dot(d, d);
+            if e.is_boundary() {
+                continue;
+            }
+            let (theta, _) = dihedral(
+                x[e.v[0] as usize],
+                x[e.v[1] as usize],
+                x[e.opposite[0] as usize],
+                x[e.opposite[1] as usize],
+            );
+            if std::f64::consts::PI - theta.abs() < FOLD_MARGIN {
+                return Err(ShellError::Folded {
+                    a: e.v[0],
+                    b: e.v[1],
+                    angle_deg: theta.to_degrees(),
+                });
+            }
+            rest_theta[k] = theta;
+            rest_phi[k] = phi(theta).0;
+        }
+        let areal = material.areal_density();
+        let mut masses = vec![0.0; x.len()];
+        let faces = mesh
+            .triangles()
+            .iter()
+            .map(|t| {
+                let p = t.map(|i| x[i as usize]);
+                let (v, area) = plane_edges(p);
+                for &i in t {
+                    masses[i as usize] += areal * area / 3.0;
+                }
+                let m = membrane_basis(&v);
+                let n = bending_basis(&v, area);
+                let sym = |b: &[[f64; 3]; 3]| {
+                    [
+                        tr_prod(b[0], b[0]),
+                        tr_prod(b[1], b[1]),
+                        tr_prod(b[2], b[2]),
+                        tr_prod(b[0], b[1]),
+                        tr_prod(b[0], b[2]),
+                        tr_prod(b[1], b[2]),
+                    ]
+                };
+                FaceRest {
+                    area,
+                    mm: sym(&m),
+                    tm: m.map(|a| a[0] + a[1]),
+                    mb: sym(&n),
+                    tb: n.map(|a| a[0] + a[1]),
+                }
+            })
+            .collect();
+        let ne = mesh.edges().len();
+        let nf = mesh.triangles().len();
+        Ok(ShellModel {
+            mesh,
+            material,
+            faces,
+            rest_length2,
+            rest_phi,
+            rest_theta,
+            masses,
+            edge_work: vec![EdgeWork::default(); ne],
+            face_work: vec![FaceWork::default(); nf],
+        })
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &ShellMesh {
+        &self.mesh
+    }
+
+    /// The material.
+    pub fn material(&self) -> &ShellMaterial {
+        &self.material
+    }
+
+    /// Lumped vertex masses (kg): a third of each triangle's `rho h A` to each of its vertices.
+    pub fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    /// Rest dihedral angle of each edge (rad; 0 on boundary edges).
+    pub fn rest_dihedral(&self) -> &[f64] {
+        &self.rest_theta
+    }
+
+    /// Rest area of each triangle (m^2).
+    pub fn rest_areas(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        self.faces.iter().map(|f| f.area)
+    }
+
+    /// Refuses `n` positions unless there is one per vertex.
+    pub fn check_positions(&self, n: usize) -> Result<(), ShellError> {
+        self.check_len("shell positions", n)
+    }
+
+    fn check_len(&self, what: &'static str, got: usize) -> Result<(), ShellError> {
+        let expected = self.mesh.num_vertices();
+        if got == expected {
+            Ok(())
+        } else {
+            Err(ShellError::LengthMismatch {
+                what,
+                expected,
+                got,
+            })
+        }
+    }
+
+    /// Pass 1: per edge, the squared length change and the dihedral angle's change, slope and
+    /// gradient at positions `x`.
+    fn edge_pass(&mut self, x: &[Vec3]) {
+        let edges = self.mesh.edges();
+        let (l2, rest_phi) = (&self.rest_length2, &self.rest_phi);
+        self.edge_work
+            .par_iter_mut()
+            .with_min_len(MIN_PER_TASK)
+            .enumerate()
+            .for_each(|(k, w)| {
+                let e = edges[k];
+                let (a, b) = (x[e.v[0] as usize], x[e.v[1] as usize]);
+                let d = sub(b, a);
+                w.s = dot(d, d) - l2[k];
+                if e.is_boundary() {
+                    w.dphi = 0.0;
+                    w.slope = 0.0;
+                    w.grad = [[0.0; 3]; 4];
+                    return;
+                }
+                let (theta, grad) =
+                    dihedral(a, b, x[e.opposite[0] as usize], x[e.opposite[1] as usize]);
+                let (p, slope) = phi(theta);
+                w.dphi = p - rest_phi[k];
+                w.slope = slope;
+                w.grad = grad;
+            });
+    }
+
+    /// Pass 2: per triangle, the energy and its derivatives by `s` and `dphi`.
+    fn face_pass(&mut self) {
+        let fe = self.mesh.face_edges();
+        let (cm, cb) = (
+            self.material.membrane_factor(),
+            self.material.bending_factor(),
+        );
+        let nu = self.material.poisson;
+        let (faces, ew) = (&self.faces, &self.edge_work);
+        self.face_work
+            .par_iter_mut()
+            .with_min_len(MIN_PER_TASK)
+            .enumerate()
+            .for_each(|(f, w)| {
+                let r = &faces[f];
+                let e = fe[f];
+                let s = e.map(|k| ew[k as usize].s);
+                let p = e.map(|k| ew[k as usize].dphi);
+                let (s2, qs) = quad(&r.mm, s);
+                let ts = dot(r.tm, s);
+                let (p2, qp) = quad(&r.mb, p);
+                let tp = dot(r.tb, p);
+                let (am, ab) = (r.area * cm, r.area * cb);
+                w.energy =
+                    am * ((1.0 - nu) * s2 + nu * ts * ts) + ab * ((1.0 - nu) * p2 + nu * tp * tp);
+                for k in 0..3 {
+                    w.ds[k] = 2.0 * am * ((1.0 - nu) * qs[k] + nu * ts * r.tm[k]);
+                    w.dphi[k] = 2.0 * ab * ((1.0 - nu) * qp[k] + nu * tp * r.tb[k]);
+                }
+            });
+    }
+
+    /// Pass 3: per edge, the derivatives summed over its triangles.
+    fn edge_sum_pass(&mut self) {
+        let (edges, fe, fw) = (self.mesh.edges(), self.mesh.face_edges(), &self.face_work);
+        self.edge_work
+            .par_iter_mut()
+            .with_min_len(MIN_PER_TASK)
+            .enumerate()
+            .for_each(|(k, w)| {
+                let e = edges[k];
+                let (mut g, mut b) = (0.0, 0.0);
+                for &f in &e.faces {
+                    if f == NONE {
+                        continue;
+                    }
+                    let f = f as usize;
+                    let local = fe[f].iter().position(|&j| j as usize == k).unwrap_or(0);
+                    g += fw[f].ds[local];
+                    b += fw[f].dphi[local];
+                }
+                w.g = g;
+                w.b = b * w.slope;
+            });
+    }
+
+    /// The elastic energy (J) at positions `x` (m), and the forces (N) into `forces`
+    /// (overwritten): minus its gradient.
+    pub fn forces(&mut self, x: &[Vec3], forces: &mut [Vec3]) -> Result<f64, ShellError> {
+        self.check_len("shell positions", x.len())?;
+        self.check_len("shell forces", forces.len())?;
+        self.edge_pass(x);
+        self.face_pass();
+        self.edge_sum_pass();
+        let (mesh, ew) = (&self.mesh, &self.edge_work);
+        forces
+            .par_iter_mut()
+            .with_min_len(MIN_PER_TASK)
+            .enumerate()
+            .for_each(|(v, f)| {
+                let mut sum = [0.0; 3];
+                for &(k, role) in mesh.stencil(v) {
+                    let e = mesh.edges()[k as usize];
+                    let w = &ew[k as usize];
+                    match role {
+                        Role::Start => {
+                            let d = sub(x[e.v[0] as usize], x[e.v[1] as usize]);
+                            sum = axpy(sum, 2.0 * w.g, d);
+                        }
+                        Role::End => {
+                            let d = sub(x[e.v[1] as usize], x[e.v[0] as usize]);
+                            sum = axpy(sum, 2.0 * w.g, d);
+                        }
+                        _ => {}
+                    }
+                    sum = axpy(sum, w.b, w.grad[role as usize]);
+                }
+                *f = scale(sum, -1.0);
+            });
+        Ok(self.face_work.iter().map(|w| w.energy).sum())
+    }
+
+    /// The elastic energy (J) at positions `x` (m).
+    pub fn energy(&mut self, x: &[Vec3]) -> Result<f64, ShellError> {
+        self.check_len("shell positions", x.len())?;
+        self.edge_pass(x);
+        self.face_pass();
+        Ok(self.face_work.iter().map(|w| w.energy).sum())
+    }
+
+    /// Each triangle's membrane and bending strain at positions `x` (m), in its rest plane's
+    /// frame.
+    pub fn strains(&mut self, x: &[Vec3]) -> Result<Vec<FaceStrain>, ShellError> {
+        self.check_len("shell positions", x.len())?;
+        self.edge_pass(x);
+        let rest = self.mesh.vertices();
+        let ew = &self.edge_work;
+        Ok(self
+            .mesh
+            .triangles()
+            .iter()
+            .zip(self.mesh.face_edges())
+            .map(|(t, e)| {
+                let (v, area) = plane_edges(t.map(|i| rest[i as usize]));
+                let (m, n) = (membrane_basis(&v), bending_basis(&v, area));
+                let mut strain = FaceStrain {
+                    membrane: [0.0; 3],
+                    bending: [0.0; 3],
+                };
+                for k in 0..3 {
+                    let w = &ew[e[k] as usize];
+                    for c in 0..3 {
+                        strain.membrane[c] += w.s * m[k][c];
+                        strain.bending[c] += w.dphi * n[k][c];
+                    }
+                }
+                strain
+            })
+            .collect())
+    }
+}
