@@ -26,6 +26,7 @@ pub mod generate;
 pub mod material;
 pub mod mesh;
 pub mod model;
+pub mod plastic;
 
 pub use dynamics::{max_frequency, ExplicitShell};
 pub use error::ShellError;
@@ -33,3 +34,4 @@ pub use material::ShellMaterial;
 pub use mesh::{Edge, Role, ShellMesh, NONE};
 pub use model::{dihedral, phi, FaceStrain, ShellModel};
 pub use perifrac_physics::Vec3;
+pub use plastic::ShellYield;

@@ -29,6 +29,7 @@ use rayon::prelude::*;
 use crate::error::ShellError;
 use crate::material::ShellMaterial;
 use crate::mesh::{Role, ShellMesh, NONE};
+use crate::plastic::{combine, return_map, yield_measure, PlasticState, ShellYield};
 use perifrac_physics::math::{add, axpy, cross, dot, norm, scale, sub, Vec3};
 
 /// Items per parallel task at least: a small mesh runs its passes on one thread, where waking
@@ -53,6 +54,10 @@ struct FaceRest {
     mb: [f64; 6],
     /// `tr N_k` (1/m).
     tb: [f64; 3],
+    /// `M_k` as `[xx, yy, xy]` (1/m^2): `E_m = sum_k s_k M_k`.
+    m: [[f64; 3]; 3],
+    /// `N_k` as `[xx, yy, xy]` (1/m): `E_c = sum_k dphi_k N_k`.
+    n: [[f64; 3]; 3],
 }
 
 /// The strains of one triangle, in its rest plane's frame `(u, w)` with `u` along rest edge
@@ -91,6 +96,8 @@ struct FaceWork {
     dphi: [f64; 3],
     /// Energy (J).
     energy: f64,
+    /// Whether the triangle yielded in the last evaluation that updated plasticity.
+    yielded: bool,
 }
 
 /// An elastic shell: the mesh, its material, the rest state's per-triangle constants and the
@@ -106,6 +113,7 @@ pub struct ShellModel {
     masses: Vec<f64>,
     edge_work: Vec<EdgeWork>,
     face_work: Vec<FaceWork>,
+    plastic: Option<PlasticState>,
 }
 
 /// `phi(theta) = 2 tan(theta / 2)` and its derivative `1 + tan^2(theta / 2)`.
@@ -140,6 +148,34 @@ pub fn dihedral(a: Vec3, b: Vec3, c0: Vec3, c1: Vec3) -> (f64, [Vec3; 4]) {
     let ga = add(scale(g0, t0 - 1.0), scale(g1, t1 - 1.0));
     let gb = add(scale(g0, -t0), scale(g1, -t1));
     (theta, [ga, gb, g0, g1])
+}
+
+/// The constants of every triangle's energy.
+struct FaceConsts {
+    /// `Y h / (2 (1 - nu^2))` (N/m).
+    cm: f64,
+    /// `Y h^3 / (24 (1 - nu^2))` (N m).
+    cb: f64,
+    /// Poisson's ratio.
+    nu: f64,
+    /// Thickness (m).
+    h: f64,
+}
+
+/// A triangle's energy and its derivatives by its elastic `s` and `dphi` into `w`.
+#[inline]
+fn face_energy(r: &FaceRest, s: [f64; 3], p: [f64; 3], c: &FaceConsts, w: &mut FaceWork) {
+    let nu = c.nu;
+    let (s2, qs) = quad(&r.mm, s);
+    let ts = dot(r.tm, s);
+    let (p2, qp) = quad(&r.mb, p);
+    let tp = dot(r.tb, p);
+    let (am, ab) = (r.area * c.cm, r.area * c.cb);
+    w.energy = am * ((1.0 - nu) * s2 + nu * ts * ts) + ab * ((1.0 - nu) * p2 + nu * tp * tp);
+    for k in 0..3 {
+        w.ds[k] = 2.0 * am * ((1.0 - nu) * qs[k] + nu * ts * r.tm[k]);
+        w.dphi[k] = 2.0 * ab * ((1.0 - nu) * qp[k] + nu * tp * r.tb[k]);
+    }
 }
 
 /// The symmetric 2x2 `[xx, yy, xy]` products `tr(A B)`.
@@ -267,6 +303,8 @@ impl ShellModel {
                     tm: m.map(|a| a[0] + a[1]),
                     mb: sym(&n),
                     tb: n.map(|a| a[0] + a[1]),
+                    m,
+                    n,
                 }
             })
             .collect();
@@ -282,7 +320,84 @@ impl ShellModel {
             masses,
             edge_work: vec![EdgeWork::default(); ne],
             face_work: vec![FaceWork::default(); nf],
+            plastic: None,
         })
+    }
+
+    /// The same shell yielding as `params` says: [`ShellModel::forces`] then return-maps every
+    /// triangle before its forces. Without this the model is elastic and keeps no plastic
+    /// state.
+    pub fn with_yield(mut self, params: ShellYield) -> ShellModel {
+        self.plastic = Some(PlasticState::new(params, self.faces.len()));
+        self
+    }
+
+    /// The yield parameters, when the shell yields.
+    pub fn yield_params(&self) -> Option<ShellYield> {
+        self.plastic.as_ref().map(|p| p.params)
+    }
+
+    /// Triangles that yielded in the last [`ShellModel::forces`].
+    pub fn yielded(&self) -> usize {
+        self.face_work.iter().filter(|w| w.yielded).count()
+    }
+
+    /// Each triangle's plastic strain, membrane and bending, in its rest plane's frame as
+    /// [`ShellModel::strains`] gives the total; all zero for an elastic shell.
+    pub fn plastic_strains(&self) -> Vec<FaceStrain> {
+        self.faces
+            .iter()
+            .enumerate()
+            .map(|(f, r)| match &self.plastic {
+                Some(p) => FaceStrain {
+                    membrane: combine(&r.m, p.s[f]),
+                    bending: combine(&r.n, p.phi[f]),
+                },
+                None => FaceStrain {
+                    membrane: [0.0; 3],
+                    bending: [0.0; 3],
+                },
+            })
+            .collect()
+    }
+
+    /// The thickness-averaged yield measure `F` of each triangle at positions `x` (m) with the
+    /// current plastic state (see [`crate::plastic`]); a triangle yields where it passes the
+    /// yield strain. `None` for an elastic shell.
+    pub fn yield_measures(&mut self, x: &[Vec3]) -> Result<Option<Vec<f64>>, ShellError> {
+        self.check_len("shell positions", x.len())?;
+        let Some(p) = &self.plastic else {
+            return Ok(None);
+        };
+        let params = p.params;
+        self.edge_pass(x);
+        let (fe, ew) = (self.mesh.face_edges(), &self.edge_work);
+        let p = self.plastic.as_ref().map(|p| (&p.s, &p.phi));
+        let Some((ps, pphi)) = p else {
+            return Ok(None);
+        };
+        let (nu, h) = (self.material.poisson, self.material.thickness);
+        Ok(Some(
+            self.faces
+                .iter()
+                .enumerate()
+                .map(|(f, r)| {
+                    let e = fe[f];
+                    let s = e.map(|k| ew[k as usize].s);
+                    let d = e.map(|k| ew[k as usize].dphi);
+                    yield_measure(
+                        combine(&r.m, s),
+                        combine(&r.n, d),
+                        combine(&r.m, ps[f]),
+                        combine(&r.n, pphi[f]),
+                        nu,
+                        params.hardening,
+                        h,
+                    )
+                    .0
+                })
+                .collect(),
+        ))
     }
 
     /// The mesh.
@@ -357,36 +472,52 @@ impl ShellModel {
             });
     }
 
-    /// Pass 2: per triangle, the energy and its derivatives by `s` and `dphi`.
-    fn face_pass(&mut self) {
+    /// Pass 2: per triangle, the energy and its derivatives by `s` and `dphi`; with `update`
+    /// and plasticity, each triangle is return-mapped first.
+    fn face_pass(&mut self, update: bool) {
         let fe = self.mesh.face_edges();
-        let (cm, cb) = (
-            self.material.membrane_factor(),
-            self.material.bending_factor(),
-        );
-        let nu = self.material.poisson;
+        let consts = FaceConsts {
+            cm: self.material.membrane_factor(),
+            cb: self.material.bending_factor(),
+            nu: self.material.poisson,
+            h: self.material.thickness,
+        };
         let (faces, ew) = (&self.faces, &self.edge_work);
-        self.face_work
-            .par_iter_mut()
-            .with_min_len(MIN_PER_TASK)
-            .enumerate()
-            .for_each(|(f, w)| {
-                let r = &faces[f];
-                let e = fe[f];
-                let s = e.map(|k| ew[k as usize].s);
-                let p = e.map(|k| ew[k as usize].dphi);
-                let (s2, qs) = quad(&r.mm, s);
-                let ts = dot(r.tm, s);
-                let (p2, qp) = quad(&r.mb, p);
-                let tp = dot(r.tb, p);
-                let (am, ab) = (r.area * cm, r.area * cb);
-                w.energy =
-                    am * ((1.0 - nu) * s2 + nu * ts * ts) + ab * ((1.0 - nu) * p2 + nu * tp * tp);
-                for k in 0..3 {
-                    w.ds[k] = 2.0 * am * ((1.0 - nu) * qs[k] + nu * ts * r.tm[k]);
-                    w.dphi[k] = 2.0 * ab * ((1.0 - nu) * qp[k] + nu * tp * r.tb[k]);
-                }
-            });
+        let totals = |f: usize| {
+            let e = fe[f];
+            (e.map(|k| ew[k as usize].s), e.map(|k| ew[k as usize].dphi))
+        };
+        match &mut self.plastic {
+            None => self
+                .face_work
+                .par_iter_mut()
+                .with_min_len(MIN_PER_TASK)
+                .enumerate()
+                .for_each(|(f, w)| {
+                    let (s, p) = totals(f);
+                    face_energy(&faces[f], s, p, &consts, w);
+                }),
+            Some(pl) => {
+                let params = pl.params;
+                self.face_work
+                    .par_iter_mut()
+                    .with_min_len(MIN_PER_TASK)
+                    .zip(pl.s.par_iter_mut().zip(pl.phi.par_iter_mut()))
+                    .enumerate()
+                    .for_each(|(f, (w, (ps, pphi)))| {
+                        let r = &faces[f];
+                        let (s, p) = totals(f);
+                        if update {
+                            w.yielded = return_map(
+                                s, p, &r.m, &r.n, ps, pphi, &params, consts.nu, consts.h,
+                            );
+                        }
+                        let se = [s[0] - ps[0], s[1] - ps[1], s[2] - ps[2]];
+                        let pe = [p[0] - pphi[0], p[1] - pphi[1], p[2] - pphi[2]];
+                        face_energy(r, se, pe, &consts, w);
+                    });
+            }
+        }
     }
 
     /// Pass 3: per edge, the derivatives summed over its triangles.
@@ -419,7 +550,7 @@ impl ShellModel {
         self.check_len("shell positions", x.len())?;
         self.check_len("shell forces", forces.len())?;
         self.edge_pass(x);
-        self.face_pass();
+        self.face_pass(true);
         self.edge_sum_pass();
         let (mesh, ew) = (&self.mesh, &self.edge_work);
         forces
@@ -453,7 +584,7 @@ impl ShellModel {
     pub fn energy(&mut self, x: &[Vec3]) -> Result<f64, ShellError> {
         self.check_len("shell positions", x.len())?;
         self.edge_pass(x);
-        self.face_pass();
+        self.face_pass(false);
         Ok(self.face_work.iter().map(|w| w.energy).sum())
     }
 
@@ -462,28 +593,14 @@ impl ShellModel {
     pub fn strains(&mut self, x: &[Vec3]) -> Result<Vec<FaceStrain>, ShellError> {
         self.check_len("shell positions", x.len())?;
         self.edge_pass(x);
-        let rest = self.mesh.vertices();
         let ew = &self.edge_work;
         Ok(self
-            .mesh
-            .triangles()
+            .faces
             .iter()
             .zip(self.mesh.face_edges())
-            .map(|(t, e)| {
-                let (v, area) = plane_edges(t.map(|i| rest[i as usize]));
-                let (m, n) = (membrane_basis(&v), bending_basis(&v, area));
-                let mut strain = FaceStrain {
-                    membrane: [0.0; 3],
-                    bending: [0.0; 3],
-                };
-                for k in 0..3 {
-                    let w = &ew[e[k] as usize];
-                    for c in 0..3 {
-                        strain.membrane[c] += w.s * m[k][c];
-                        strain.bending[c] += w.dphi * n[k][c];
-                    }
-                }
-                strain
+            .map(|(r, e)| FaceStrain {
+                membrane: combine(&r.m, e.map(|k| ew[k as usize].s)),
+                bending: combine(&r.n, e.map(|k| ew[k as usize].dphi)),
             })
             .collect())
     }
