@@ -2,6 +2,7 @@
 //! Verlet) and the estimate of its stable step.
 
 use crate::error::ShellError;
+use crate::fracture::FractureReport;
 use crate::model::ShellModel;
 use perifrac_physics::lanczos_frequency_of;
 use perifrac_physics::math::{axpy, dot, norm, scale, sub, Vec3};
@@ -56,7 +57,7 @@ impl ExplicitShell {
         &self.v
     }
 
-    /// Vertex velocities to set (m/s); pinned vertices keep theirs at zero when stepped.
+    /// Vertex velocities to set (m/s); pinned and driven vertices keep theirs when stepped.
     pub fn velocities_mut(&mut self) -> &mut [Vec3] {
         &mut self.v
     }
@@ -96,9 +97,14 @@ impl ExplicitShell {
 
     /// Holds vertex `i` where it is (and at rest) from now on.
     pub fn pin(&mut self, i: usize) {
+        self.drive(i, [0.0; 3]);
+    }
+
+    /// Moves vertex `i` at the constant `velocity` (m/s) from now on, whatever pulls on it.
+    pub fn drive(&mut self, i: usize, velocity: Vec3) {
         if let Some(p) = self.pinned.get_mut(i) {
             *p = true;
-            self.v[i] = [0.0; 3];
+            self.v[i] = velocity;
         }
     }
 
@@ -142,10 +148,8 @@ impl ExplicitShell {
             });
         }
         self.kick(0.5 * dt);
-        for ((x, v), &p) in self.x.iter_mut().zip(&self.v).zip(&self.pinned) {
-            if !p {
-                *x = axpy(*x, dt, *v);
-            }
+        for (x, v) in self.x.iter_mut().zip(&self.v) {
+            *x = axpy(*x, dt, *v);
         }
         self.elastic = self.model.forces(&self.x, &mut self.f)?;
         self.kick(0.5 * dt);
@@ -167,6 +171,23 @@ impl ExplicitShell {
                 *v = scale(axpy(axpy(*v, h / m, *f), h, g), keep);
             }
         }
+    }
+
+    /// Breaks every triangle over its threshold now (see [`ShellModel::fracture`]): vertices
+    /// added take their sources' pins (a point on an edge is pinned when both ends are), and
+    /// the forces are evaluated on the new mesh.
+    pub fn fracture(&mut self) -> Result<FractureReport, ShellError> {
+        let report = self.model.fracture(&mut self.x, &mut self.v)?;
+        if report.events.is_empty() {
+            return Ok(report);
+        }
+        for src in &report.added {
+            let pinned = self.pinned[src[0] as usize] && self.pinned[src[1] as usize];
+            self.pinned.push(pinned);
+        }
+        self.f.resize(self.x.len(), [0.0; 3]);
+        self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        Ok(report)
     }
 
     /// The stable step (s) at the current positions: `2 / omega_max` with the highest angular

@@ -22,6 +22,7 @@
 
 pub mod dynamics;
 pub mod error;
+pub mod fracture;
 pub mod generate;
 pub mod material;
 pub mod mesh;
@@ -30,6 +31,7 @@ pub mod plastic;
 
 pub use dynamics::{max_frequency, ExplicitShell};
 pub use error::ShellError;
+pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;
 pub use mesh::{Edge, Role, ShellMesh, NONE};
 pub use model::{dihedral, phi, FaceStrain, ShellModel};

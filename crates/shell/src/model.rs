@@ -42,9 +42,9 @@ const FOLD_MARGIN: f64 = 1e-3;
 
 /// What a triangle's energy needs of its rest state.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct FaceRest {
+pub(crate) struct FaceRest {
     /// Rest area (m^2).
-    area: f64,
+    pub area: f64,
     /// `tr(M_k M_l)`, symmetric, as `[00, 11, 22, 01, 02, 12]`, with `E_m = sum_k s_k M_k`
     /// (1/m^4).
     mm: [f64; 6],
@@ -55,9 +55,9 @@ struct FaceRest {
     /// `tr N_k` (1/m).
     tb: [f64; 3],
     /// `M_k` as `[xx, yy, xy]` (1/m^2): `E_m = sum_k s_k M_k`.
-    m: [[f64; 3]; 3],
+    pub m: [[f64; 3]; 3],
     /// `N_k` as `[xx, yy, xy]` (1/m): `E_c = sum_k dphi_k N_k`.
-    n: [[f64; 3]; 3],
+    pub n: [[f64; 3]; 3],
 }
 
 /// The strains of one triangle, in its rest plane's frame `(u, w)` with `u` along rest edge
@@ -72,11 +72,11 @@ pub struct FaceStrain {
 
 /// Per-edge results of a force evaluation.
 #[derive(Debug, Clone, Copy, Default)]
-struct EdgeWork {
+pub(crate) struct EdgeWork {
     /// Squared length change `s` (m^2).
-    s: f64,
+    pub s: f64,
     /// `phi(theta) - phi(theta_rest)` (dimensionless); 0 on a boundary.
-    dphi: f64,
+    pub dphi: f64,
     /// `d phi / d theta`.
     slope: f64,
     /// Gradient of `theta` by the stencil's vertices `[v0, v1, opposite0, opposite1]` (1/m).
@@ -104,16 +104,106 @@ struct FaceWork {
 /// buffers of the force passes.
 #[derive(Debug, Clone)]
 pub struct ShellModel {
-    mesh: ShellMesh,
-    material: ShellMaterial,
-    faces: Vec<FaceRest>,
+    pub(crate) mesh: ShellMesh,
+    pub(crate) material: ShellMaterial,
+    pub(crate) faces: Vec<FaceRest>,
     rest_length2: Vec<f64>,
     rest_phi: Vec<f64>,
     rest_theta: Vec<f64>,
     masses: Vec<f64>,
-    edge_work: Vec<EdgeWork>,
+    pub(crate) edge_work: Vec<EdgeWork>,
     face_work: Vec<FaceWork>,
-    plastic: Option<PlasticState>,
+    pub(crate) plastic: Option<PlasticState>,
+    pub(crate) fracture: Option<crate::fracture::FractureState>,
+}
+
+/// Plastic offsets per triangle: squared edge-length changes (m^2) and `phi` changes.
+pub(crate) type Offsets = (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// Everything of the rest state that the mesh and material fix.
+struct RestData {
+    faces: Vec<FaceRest>,
+    length2: Vec<f64>,
+    phi: Vec<f64>,
+    theta: Vec<f64>,
+    masses: Vec<f64>,
+}
+
+impl RestData {
+    fn of(mesh: &ShellMesh, material: &ShellMaterial) -> Result<RestData, ShellError> {
+        let x = mesh.vertices();
+        let mut theta = vec![0.0; mesh.edges().len()];
+        let mut phis = vec![0.0; mesh.edges().len()];
+        let mut length2 = vec![0.0; mesh.edges().len()];
+        for (k, e) in mesh.edges().iter().enumerate() {
+            let d = sub(x[e.v[1] as usize], x[e.v[0] as usize]);
+            length2[k] = dot(d, d);
+            if e.is_boundary() {
+                continue;
+            }
+            let (t, _) = dihedral(
+                x[e.v[0] as usize],
+                x[e.v[1] as usize],
+                x[e.opposite[0] as usize],
+                x[e.opposite[1] as usize],
+            );
+            if std::f64::consts::PI - t.abs() < FOLD_MARGIN {
+                return Err(ShellError::Folded {
+                    a: e.v[0],
+                    b: e.v[1],
+                    angle_deg: t.to_degrees(),
+                });
+            }
+            theta[k] = t;
+            phis[k] = phi(t).0;
+        }
+        let areal = material.areal_density();
+        let mut masses = vec![0.0; x.len()];
+        let faces = mesh
+            .triangles()
+            .iter()
+            .map(|t| {
+                let (v, area) = plane_edges(t.map(|i| x[i as usize]));
+                for &i in t {
+                    masses[i as usize] += areal * area / 3.0;
+                }
+                FaceRest::new(&v, area)
+            })
+            .collect();
+        Ok(RestData {
+            faces,
+            length2,
+            phi: phis,
+            theta,
+            masses,
+        })
+    }
+}
+
+impl FaceRest {
+    fn new(v: &[[f64; 2]; 3], area: f64) -> FaceRest {
+        let m = membrane_basis(v);
+        let n = bending_basis(v, area);
+        let sym = |b: &[[f64; 3]; 3]| {
+            [
+                tr_prod(b[0], b[0]),
+                tr_prod(b[1], b[1]),
+                tr_prod(b[2], b[2]),
+                tr_prod(b[0], b[1]),
+                tr_prod(b[0], b[2]),
+                tr_prod(b[1], b[2]),
+            ]
+        };
+        FaceRest {
+            area,
+            mm: sym(&m),
+            tm: m.map(|a| a[0] + a[1]),
+            mb: sym(&n),
+            tb: n.map(|a| a[0] + a[1]),
+            m,
+            n,
+        }
+    }
 }
 
 /// `phi(theta) = 2 tan(theta / 2)` and its derivative `1 + tan^2(theta / 2)`.
@@ -248,93 +338,61 @@ impl ShellModel {
     /// The shell at rest in the mesh's vertex positions. Refuses a mesh with two triangles
     /// folded onto each other (rest dihedral angle within 1e-3 rad of 180 degrees).
     pub fn new(mesh: ShellMesh, material: ShellMaterial) -> Result<ShellModel, ShellError> {
-        let x = mesh.vertices();
-        let mut rest_theta = vec![0.0; mesh.edges().len()];
-        let mut rest_phi = vec![0.0; mesh.edges().len()];
-        let mut rest_length2 = vec![0.0; mesh.edges().len()];
-        for (k, e) in mesh.edges().iter().enumerate() {
-            let d = sub(x[e.v[1] as usize], x[e.v[0] as usize]);
-            rest_length2[k] = dot(d, d);
-            if e.is_boundary() {
-                continue;
-            }
-            let (theta, _) = dihedral(
-                x[e.v[0] as usize],
-                x[e.v[1] as usize],
-                x[e.opposite[0] as usize],
-                x[e.opposite[1] as usize],
-            );
-            if std::f64::consts::PI - theta.abs() < FOLD_MARGIN {
-                return Err(ShellError::Folded {
-                    a: e.v[0],
-                    b: e.v[1],
-                    angle_deg: theta.to_degrees(),
-                });
-            }
-            rest_theta[k] = theta;
-            rest_phi[k] = phi(theta).0;
-        }
-        let areal = material.areal_density();
-        let mut masses = vec![0.0; x.len()];
-        let faces = mesh
-            .triangles()
-            .iter()
-            .map(|t| {
-                let p = t.map(|i| x[i as usize]);
-                let (v, area) = plane_edges(p);
-                for &i in t {
-                    masses[i as usize] += areal * area / 3.0;
-                }
-                let m = membrane_basis(&v);
-                let n = bending_basis(&v, area);
-                let sym = |b: &[[f64; 3]; 3]| {
-                    [
-                        tr_prod(b[0], b[0]),
-                        tr_prod(b[1], b[1]),
-                        tr_prod(b[2], b[2]),
-                        tr_prod(b[0], b[1]),
-                        tr_prod(b[0], b[2]),
-                        tr_prod(b[1], b[2]),
-                    ]
-                };
-                FaceRest {
-                    area,
-                    mm: sym(&m),
-                    tm: m.map(|a| a[0] + a[1]),
-                    mb: sym(&n),
-                    tb: n.map(|a| a[0] + a[1]),
-                    m,
-                    n,
-                }
-            })
-            .collect();
+        let rest = RestData::of(&mesh, &material)?;
         let ne = mesh.edges().len();
         let nf = mesh.triangles().len();
         Ok(ShellModel {
             mesh,
             material,
-            faces,
-            rest_length2,
-            rest_phi,
-            rest_theta,
-            masses,
+            faces: rest.faces,
+            rest_length2: rest.length2,
+            rest_phi: rest.phi,
+            rest_theta: rest.theta,
+            masses: rest.masses,
             edge_work: vec![EdgeWork::default(); ne],
             face_work: vec![FaceWork::default(); nf],
             plastic: None,
+            fracture: None,
         })
+    }
+
+    /// Replaces the mesh (after fracture changed it) and recomputes everything of the rest
+    /// state; the plastic offsets, per triangle, are the caller's.
+    pub(crate) fn rebuild(
+        &mut self,
+        mesh: ShellMesh,
+        offsets: Option<Offsets>,
+    ) -> Result<(), ShellError> {
+        let rest = RestData::of(&mesh, &self.material)?;
+        self.edge_work = vec![EdgeWork::default(); mesh.edges().len()];
+        self.face_work = vec![FaceWork::default(); mesh.triangles().len()];
+        self.faces = rest.faces;
+        self.rest_length2 = rest.length2;
+        self.rest_phi = rest.phi;
+        self.rest_theta = rest.theta;
+        self.masses = rest.masses;
+        self.mesh = mesh;
+        if let (Some(p), Some((s, phi))) = (&mut self.plastic, offsets) {
+            p.s = s;
+            p.phi = phi;
+        }
+        Ok(())
     }
 
     /// The same shell yielding as `params` says: [`ShellModel::forces`] then return-maps every
     /// triangle before its forces. Without this the model is elastic and keeps no plastic
     /// state.
     pub fn with_yield(mut self, params: ShellYield) -> ShellModel {
-        self.plastic = Some(PlasticState::new(params, self.faces.len()));
+        match &mut self.plastic {
+            Some(p) => p.params = Some(params),
+            None => self.plastic = Some(PlasticState::new(Some(params), self.faces.len())),
+        }
         self
     }
 
     /// The yield parameters, when the shell yields.
     pub fn yield_params(&self) -> Option<ShellYield> {
-        self.plastic.as_ref().map(|p| p.params)
+        self.plastic.as_ref().and_then(|p| p.params)
     }
 
     /// Triangles that yielded in the last [`ShellModel::forces`].
@@ -366,10 +424,9 @@ impl ShellModel {
     /// yield strain. `None` for an elastic shell.
     pub fn yield_measures(&mut self, x: &[Vec3]) -> Result<Option<Vec<f64>>, ShellError> {
         self.check_len("shell positions", x.len())?;
-        let Some(p) = &self.plastic else {
+        let Some(params) = self.yield_params() else {
             return Ok(None);
         };
-        let params = p.params;
         self.edge_pass(x);
         let (fe, ew) = (self.mesh.face_edges(), &self.edge_work);
         let p = self.plastic.as_ref().map(|p| (&p.s, &p.phi));
@@ -445,7 +502,7 @@ impl ShellModel {
 
     /// Pass 1: per edge, the squared length change and the dihedral angle's change, slope and
     /// gradient at positions `x`.
-    fn edge_pass(&mut self, x: &[Vec3]) {
+    pub(crate) fn edge_pass(&mut self, x: &[Vec3]) {
         let edges = self.mesh.edges();
         let (l2, rest_phi) = (&self.rest_length2, &self.rest_phi);
         self.edge_work
@@ -499,6 +556,7 @@ impl ShellModel {
                 }),
             Some(pl) => {
                 let params = pl.params;
+                let update = update && params.is_some();
                 self.face_work
                     .par_iter_mut()
                     .with_min_len(MIN_PER_TASK)
@@ -507,10 +565,9 @@ impl ShellModel {
                     .for_each(|(f, (w, (ps, pphi)))| {
                         let r = &faces[f];
                         let (s, p) = totals(f);
-                        if update {
-                            w.yielded = return_map(
-                                s, p, &r.m, &r.n, ps, pphi, &params, consts.nu, consts.h,
-                            );
+                        if let (true, Some(params)) = (update, &params) {
+                            w.yielded =
+                                return_map(s, p, &r.m, &r.n, ps, pphi, params, consts.nu, consts.h);
                         }
                         let se = [s[0] - ps[0], s[1] - ps[1], s[2] - ps[2]];
                         let pe = [p[0] - pphi[0], p[1] - pphi[1], p[2] - pphi[2]];

@@ -51,10 +51,13 @@ impl ShellYield {
 }
 
 /// The plastic state of every triangle: its plastic strain in the coordinates of the strains
-/// (the squared edge-length changes and the `phi` changes it takes off the total ones).
+/// (the squared edge-length changes and the `phi` changes it takes off the total ones). Kept
+/// when the material yields, and when it fractures (vertex budging changes the rest state
+/// through it).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct PlasticState {
-    pub params: ShellYield,
+    /// Yield and hardening; `None`: the offsets change only by fracture.
+    pub params: Option<ShellYield>,
     /// Per triangle, the plastic squared edge-length change of each edge (m^2).
     pub s: Vec<[f64; 3]>,
     /// Per triangle, the plastic change of `phi` at each edge (dimensionless).
@@ -62,7 +65,7 @@ pub(crate) struct PlasticState {
 }
 
 impl PlasticState {
-    pub fn new(params: ShellYield, faces: usize) -> PlasticState {
+    pub fn new(params: Option<ShellYield>, faces: usize) -> PlasticState {
         PlasticState {
             params,
             s: vec![[0.0; 3]; faces],

@@ -1,0 +1,637 @@
+//! Shell fracture (Gingold et al. 2004): a triangle fails where the principal elastic strain on
+//! either face of the shell (`E_m + z E_c` at `z = +-h/2`) passes a threshold, and splits along
+//! the line perpendicular to that principal direction through one of its vertices; the
+//! neighbour across the split edge is split too, so the crack runs vertex - new point -
+//! opposite vertex and opens at the new point. A split point that would fall within `budge` of
+//! an edge's end moves that vertex onto the line instead (a vertex budge), its change of strain
+//! taken up by the plastic offsets, and the crack follows the existing edge.
+//!
+//! Cracks are kept as flags on triangle edges. After each round of splits every vertex whose
+//! triangles fall into more than one fan once cracked edges are taken out is split into one
+//! vertex per fan (as the solid's tet mesh splits vertices), which opens the crack; a crack tip
+//! stays one vertex until the crack reaches it again from another side.
+
+use std::collections::BTreeSet;
+
+use perifrac_physics::math::{add, cross, dot, norm, scale, sub, Vec3};
+
+use crate::error::ShellError;
+use crate::mesh::{Role, ShellMesh, NONE};
+use crate::model::ShellModel;
+use crate::plastic::combine;
+
+/// No split or budge makes a triangle with an angle under this (deg); a split that would goes
+/// through the nearer vertex instead.
+pub const MIN_ANGLE: f64 = 15.0;
+
+/// When a shell breaks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellFracture {
+    /// Principal tensile strain at which a triangle breaks (dimensionless, > 0).
+    pub tensile: f64,
+    /// Magnitude of the principal compressive strain at which it breaks (dimensionless, > 0;
+    /// the paper uses one threshold for both).
+    pub compressive: f64,
+    /// A split point closer than this share of its edge's length to an end budges that vertex
+    /// instead (dimensionless, in [0, 0.5); default 0.25; 0 never budges).
+    pub budge: f64,
+}
+
+impl ShellFracture {
+    /// Checks the thresholds are finite and > 0 and `budge` in [0, 0.5).
+    pub fn new(tensile: f64, compressive: f64, budge: f64) -> Result<ShellFracture, ShellError> {
+        for (what, value) in [
+            ("shell tensile fracture strain", tensile),
+            ("shell compressive fracture strain", compressive),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ShellError::BadSetting {
+                    what,
+                    expected: "finite and > 0",
+                    value,
+                });
+            }
+        }
+        if !(0.0..0.5).contains(&budge) {
+            return Err(ShellError::BadSetting {
+                what: "shell budge share",
+                expected: "in [0, 0.5)",
+                value: budge,
+            });
+        }
+        Ok(ShellFracture {
+            tensile,
+            compressive,
+            budge,
+        })
+    }
+}
+
+/// The fracture state kept with a model: its thresholds and which triangle edges are cracks.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct FractureState {
+    pub params: ShellFracture,
+    /// Per triangle, whether its edge opposite each vertex is a crack.
+    pub crack: Vec<[bool; 3]>,
+}
+
+/// One triangle that broke.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FractureEvent {
+    /// The triangle (index before the round's changes).
+    pub face: usize,
+    /// Its principal strain over the threshold (> 1).
+    pub ratio: f64,
+    /// Whether a vertex was budged instead of a new one made.
+    pub budged: bool,
+}
+
+/// What a round of fracture did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FractureReport {
+    /// The triangles that broke, in the order they were split.
+    pub events: Vec<FractureEvent>,
+    /// For each vertex added (in order, after the old ones), the two vertices it came from:
+    /// the ends of the edge it was put on, or the vertex it was split from twice.
+    pub added: Vec<[u32; 2]>,
+}
+
+/// The largest-magnitude eigenvalue of a symmetric 2x2 `[xx, yy, xy]` and its unit eigenvector.
+fn principal(t: [f64; 3]) -> (f64, [f64; 2]) {
+    let mean = 0.5 * (t[0] + t[1]);
+    let half = 0.5 * (t[0] - t[1]);
+    let r = (half * half + t[2] * t[2]).sqrt();
+    let lambda = if mean >= 0.0 { mean + r } else { mean - r };
+    let (a, b) = ([t[2], lambda - t[0]], [lambda - t[1], t[2]]);
+    let v = if a[0] * a[0] + a[1] * a[1] >= b[0] * b[0] + b[1] * b[1] {
+        a
+    } else {
+        b
+    };
+    let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    if l > 0.0 {
+        (lambda, [v[0] / l, v[1] / l])
+    } else {
+        (lambda, [1.0, 0.0])
+    }
+}
+
+/// The rest triangle's vertices in its plane's frame (the frame of its strains: `u` along
+/// `p0 -> p1`, `w = n x u`).
+fn plane_points(p: [Vec3; 3]) -> [[f64; 2]; 3] {
+    let e = sub(p[1], p[0]);
+    let u = scale(e, 1.0 / norm(e));
+    let n = cross(e, sub(p[2], p[0]));
+    let w = cross(scale(n, 1.0 / norm(n)), u);
+    let d = sub(p[2], p[0]);
+    [[0.0, 0.0], [norm(e), 0.0], [dot(d, u), dot(d, w)]]
+}
+
+#[inline]
+fn lerp(a: Vec3, b: Vec3, t: f64) -> Vec3 {
+    add(a, scale(sub(b, a), t))
+}
+
+/// The arrays a round of fracture edits.
+struct Edit {
+    rest: Vec<Vec3>,
+    tris: Vec<[u32; 3]>,
+    ps: Vec<[f64; 3]>,
+    pphi: Vec<[f64; 3]>,
+    crack: Vec<[bool; 3]>,
+    added: Vec<[u32; 2]>,
+}
+
+impl Edit {
+    /// Splits triangle `f` from its vertex `i` to the point `q` (already made) at `t` along its
+    /// opposite edge (from vertex `i + 1` to `i + 2`): `f` keeps `(v, a, q)`, a new triangle
+    /// takes `(v, q, b)`; the new edge is a crack; plastic offsets carry over (the new edge's
+    /// squared-length offset from the triangle's plastic metric, exact for a uniform one).
+    fn split(&mut self, f: usize, i: usize, q: u32, t: f64) {
+        let tri = self.tris[f];
+        let (v, a, b) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
+        let (ev, ea, eb) = (i, (i + 1) % 3, (i + 2) % 3);
+        let ps = self.ps[f];
+        let pphi = self.pphi[f];
+        let crack = self.crack[f];
+        let new_edge = ps[eb] + t * t * ps[ev] + t * (ps[ea] - ps[eb] - ps[ev]);
+        self.tris[f] = [v, a, q];
+        self.ps[f] = [t * t * ps[ev], new_edge, ps[eb]];
+        self.pphi[f] = [pphi[ev], 0.0, pphi[eb]];
+        self.crack[f] = [crack[ev], true, crack[eb]];
+        let u = 1.0 - t;
+        self.tris.push([v, q, b]);
+        self.ps.push([u * u * ps[ev], ps[ea], new_edge]);
+        self.pphi.push([pphi[ev], pphi[ea], 0.0]);
+        self.crack.push([crack[ev], crack[ea], true]);
+    }
+
+    /// Marks the edge `(a, b)` a crack in every triangle that has it.
+    fn mark(&mut self, a: u32, b: u32, faces: &[u32]) {
+        for &f in faces {
+            if f == NONE {
+                continue;
+            }
+            let t = self.tris[f as usize];
+            for k in 0..3 {
+                let (p, q) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+                if (p == a && q == b) || (p == b && q == a) {
+                    self.crack[f as usize][k] = true;
+                }
+            }
+        }
+    }
+}
+
+impl ShellModel {
+    /// The same shell breaking as `params` says (it keeps plastic offsets for the budges).
+    pub fn with_fracture(mut self, params: ShellFracture) -> ShellModel {
+        let nf = self.faces.len();
+        if self.plastic.is_none() {
+            self.plastic = Some(crate::plastic::PlasticState::new(None, nf));
+        }
+        self.fracture = Some(FractureState {
+            params,
+            crack: vec![[false; 3]; nf],
+        });
+        self
+    }
+
+    /// The fracture thresholds, when the shell breaks.
+    pub fn fracture_params(&self) -> Option<ShellFracture> {
+        self.fracture.as_ref().map(|f| f.params)
+    }
+
+    /// Per triangle, whether its edge opposite each vertex is a crack (empty for a shell that
+    /// does not break).
+    pub fn crack_edges(&self) -> &[[bool; 3]] {
+        self.fracture.as_ref().map_or(&[], |f| &f.crack)
+    }
+
+    /// Each triangle's largest principal elastic strain on either face of the shell over its
+    /// threshold (tensile or compressive): above 1 it breaks; with the principal direction in
+    /// its rest frame. Empty for a shell that does not break.
+    pub fn fracture_ratios(&mut self, x: &[Vec3]) -> Result<Vec<(f64, [f64; 2])>, ShellError> {
+        self.check_positions(x.len())?;
+        let Some(fs) = &self.fracture else {
+            return Ok(Vec::new());
+        };
+        let params = fs.params;
+        self.edge_pass(x);
+        let h = self.material.thickness;
+        let fe = self.mesh.face_edges();
+        let plastic = self.plastic.as_ref();
+        Ok(self
+            .faces
+            .iter()
+            .enumerate()
+            .map(|(f, r)| {
+                let e = fe[f];
+                let mut s = e.map(|k| self.edge_work[k as usize].s);
+                let mut d = e.map(|k| self.edge_work[k as usize].dphi);
+                if let Some(p) = plastic {
+                    for k in 0..3 {
+                        s[k] -= p.s[f][k];
+                        d[k] -= p.phi[f][k];
+                    }
+                }
+                let (em, ec) = (combine(&r.m, s), combine(&r.n, d));
+                let mut best = (0.0, [1.0, 0.0]);
+                for z in [0.5 * h, -0.5 * h] {
+                    let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
+                    let (l, dir) = principal(t);
+                    let ratio = if l >= 0.0 {
+                        l / params.tensile
+                    } else {
+                        -l / params.compressive
+                    };
+                    if ratio > best.0 {
+                        best = (ratio, dir);
+                    }
+                }
+                best
+            })
+            .collect())
+    }
+
+    /// Breaks every triangle over its threshold at positions `x` (m), velocities `v` (m/s):
+    /// splits (or budges), opens the cracks by splitting vertices, and rebuilds the rest state.
+    /// `x` and `v` grow by the vertices added; the report says where each came from. Nothing
+    /// happens for a shell that does not break or when no triangle is over.
+    pub fn fracture(
+        &mut self,
+        x: &mut Vec<Vec3>,
+        v: &mut Vec<Vec3>,
+    ) -> Result<FractureReport, ShellError> {
+        let ratios = self.fracture_ratios(x)?;
+        let mut over: Vec<(usize, f64, [f64; 2])> = ratios
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.0 > 1.0)
+            .map(|(f, r)| (f, r.0, r.1))
+            .collect();
+        let mut report = FractureReport::default();
+        if over.is_empty() {
+            return Ok(report);
+        }
+        // The most strained first; ties by index: the same order for any thread count.
+        over.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        let (Some(fs), Some(pl)) = (&self.fracture, &self.plastic) else {
+            return Ok(report);
+        };
+        let budge = fs.params.budge;
+        let nf = self.faces.len();
+        let n0 = x.len();
+        // Elastic coordinates before the round, for the triangles a budge changes.
+        let elastic: Vec<([f64; 3], [f64; 3])> = {
+            let fe = self.mesh.face_edges();
+            (0..nf)
+                .map(|f| {
+                    let e = fe[f];
+                    let mut s = e.map(|k| self.edge_work[k as usize].s);
+                    let mut d = e.map(|k| self.edge_work[k as usize].dphi);
+                    for k in 0..3 {
+                        s[k] -= pl.s[f][k];
+                        d[k] -= pl.phi[f][k];
+                    }
+                    (s, d)
+                })
+                .collect()
+        };
+        let mesh = &self.mesh;
+        let mut on_boundary = vec![false; n0];
+        for e in mesh.edges() {
+            if e.is_boundary() {
+                on_boundary[e.v[0] as usize] = true;
+                on_boundary[e.v[1] as usize] = true;
+            }
+        }
+        let mut edit = Edit {
+            rest: mesh.vertices().to_vec(),
+            tris: mesh.triangles().to_vec(),
+            ps: pl.s.clone(),
+            pphi: pl.phi.clone(),
+            crack: fs.crack.clone(),
+            added: Vec::new(),
+        };
+        let mut touched = vec![false; nf];
+        let mut absorb: BTreeSet<usize> = BTreeSet::new();
+        for &(f, ratio, dir) in &over {
+            if touched[f] {
+                continue;
+            }
+            let tri = mesh.triangles()[f];
+            let pts = plane_points(tri.map(|i| mesh.vertices()[i as usize]));
+            let proj = pts.map(|p| p[0] * dir[0] + p[1] * dir[1]);
+            // The line through a vertex perpendicular to `dir` crosses the opposite edge
+            // only for the vertex whose projection lies between the other two.
+            let i = (0..3)
+                .find(|&i| {
+                    let (a, b) = (proj[(i + 1) % 3], proj[(i + 2) % 3]);
+                    (a.min(b)..=a.max(b)).contains(&proj[i])
+                })
+                .unwrap_or(0);
+            let (pa, pb) = (proj[(i + 1) % 3], proj[(i + 2) % 3]);
+            let t = if pb != pa {
+                ((proj[i] - pa) / (pb - pa)).clamp(0.0, 1.0)
+            } else {
+                0.5
+            };
+            let (vv, a, b) = (tri[i], tri[(i + 1) % 3], tri[(i + 2) % 3]);
+            let edge = mesh.edges()[mesh.face_edges()[f][i] as usize];
+            let g = if edge.faces[0] as usize == f {
+                edge.faces[1]
+            } else {
+                edge.faces[0]
+            };
+            if g != NONE && touched[g as usize] {
+                continue;
+            }
+            let (ra, rb, rv) = (
+                mesh.vertices()[a as usize],
+                mesh.vertices()[b as usize],
+                mesh.vertices()[vv as usize],
+            );
+            let rq = lerp(ra, rb, t);
+            // A split whose pieces would have an angle under MIN_ANGLE (the secondary split's
+            // included), or that falls within `budge` of an end, goes through the nearer end
+            // instead.
+            let mut sliver = min_angle([rv, ra, rq]).min(min_angle([rv, rq, rb])) < MIN_ANGLE;
+            if g != NONE {
+                let gt = mesh.triangles()[g as usize];
+                if let Some(&w) = gt.iter().find(|&&w| w != a && w != b) {
+                    let rw = mesh.vertices()[w as usize];
+                    sliver |= min_angle([rw, rb, rq]).min(min_angle([rw, rq, ra])) < MIN_ANGLE;
+                }
+            }
+            let near = if t < budge || (sliver && t < 0.5) {
+                Some(a)
+            } else if t > 1.0 - budge || sliver {
+                Some(b)
+            } else {
+                None
+            };
+            if let Some(c) = near {
+                let around: Vec<usize> = faces_around(mesh, c);
+                if around.iter().any(|&g| touched[g]) {
+                    continue;
+                }
+                // The crack runs along (v, c) and, unless c is on a boundary (where one cut
+                // edge opens it), on along the edge from c that best continues the line, so
+                // that c opens.
+                let mut cut = vec![(vv, c)];
+                if !on_boundary[c as usize] {
+                    if let Some(u) = continuation(mesh, vv, c) {
+                        cut.push((c, u));
+                    }
+                }
+                let fresh = cut.iter().any(|&(p, q)| !is_crack(mesh, &edit, p, q));
+                if !fresh {
+                    continue;
+                }
+                // Budge: c moves onto the line (rest and current positions) when it is not on
+                // a boundary and no triangle around it would get an angle under MIN_ANGLE or
+                // turn over.
+                if !on_boundary[c as usize] && budge_keeps_quality(mesh, &around, c, rq) {
+                    edit.rest[c as usize] = rq;
+                    x[c as usize] = lerp(x[a as usize], x[b as usize], t);
+                    absorb.extend(around.iter().copied());
+                }
+                for &(p, q) in &cut {
+                    let faces = faces_around(mesh, p);
+                    let faces: Vec<u32> = faces.iter().map(|&f| f as u32).collect();
+                    edit.mark(p, q, &faces);
+                }
+                for &g in &around {
+                    touched[g] = true;
+                }
+                report.events.push(FractureEvent {
+                    face: f,
+                    ratio,
+                    budged: true,
+                });
+                continue;
+            }
+            let q = (n0 + edit.added.len()) as u32;
+            edit.rest.push(rq);
+            x.push(lerp(x[a as usize], x[b as usize], t));
+            v.push(lerp(v[a as usize], v[b as usize], t));
+            edit.added.push([a, b]);
+            edit.split(f, i, q, t);
+            touched[f] = true;
+            touched.push(true);
+            if g != NONE {
+                let gt = edit.tris[g as usize];
+                // g runs b -> a; its vertex opposite the edge splits it from b towards a.
+                let j = (0..3)
+                    .find(|&j| gt[(j + 1) % 3] == b && gt[(j + 2) % 3] == a)
+                    .unwrap_or(0);
+                edit.split(g as usize, j, q, 1.0 - t);
+                touched[g as usize] = true;
+                touched.push(true);
+            }
+            report.events.push(FractureEvent {
+                face: f,
+                ratio,
+                budged: false,
+            });
+        }
+        open_cracks(&mut edit, x, v);
+        report.added = edit.added.clone();
+        let Edit {
+            rest,
+            tris,
+            ps,
+            pphi,
+            crack,
+            ..
+        } = edit;
+        let mesh = ShellMesh::new(rest, tris)?;
+        self.rebuild(mesh, Some((ps, pphi)))?;
+        if let Some(fs) = &mut self.fracture {
+            fs.crack = crack;
+        }
+        // A budge changes the strains of the triangles around the vertex; the plastic offsets
+        // take the change, so their elastic strain coordinates stay as they were.
+        if !absorb.is_empty() {
+            self.edge_pass(x);
+            let fe = self.mesh.face_edges().to_vec();
+            if let Some(pl) = &mut self.plastic {
+                for &f in &absorb {
+                    for (k, &e) in fe[f].iter().enumerate() {
+                        pl.s[f][k] = self.edge_work[e as usize].s - elastic[f].0[k];
+                        pl.phi[f][k] = self.edge_work[e as usize].dphi - elastic[f].1[k];
+                    }
+                }
+            }
+        }
+        Ok(report)
+    }
+}
+
+/// The smallest interior angle (deg) of a triangle.
+fn min_angle(p: [Vec3; 3]) -> f64 {
+    (0..3)
+        .map(|k| {
+            let a = sub(p[(k + 1) % 3], p[k]);
+            let b = sub(p[(k + 2) % 3], p[k]);
+            let c = dot(a, b) / (dot(a, a) * dot(b, b)).sqrt();
+            c.clamp(-1.0, 1.0).acos().to_degrees()
+        })
+        .fold(180.0, f64::min)
+}
+
+/// The triangles that have vertex `c`.
+fn faces_around(mesh: &ShellMesh, c: u32) -> Vec<usize> {
+    let mut out: Vec<usize> = mesh
+        .stencil(c as usize)
+        .iter()
+        .filter(|(_, role)| matches!(role, Role::Start | Role::End))
+        .flat_map(|&(k, _)| mesh.edges()[k as usize].faces)
+        .filter(|&g| g != NONE)
+        .map(|g| g as usize)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Whether the edge `(p, q)` is already a crack in a triangle that has it.
+fn is_crack(mesh: &ShellMesh, edit: &Edit, p: u32, q: u32) -> bool {
+    faces_around(mesh, p).iter().any(|&f| {
+        let t = edit.tris[f];
+        (0..3).any(|k| {
+            let (a, b) = (t[(k + 1) % 3], t[(k + 2) % 3]);
+            ((a == p && b == q) || (a == q && b == p)) && edit.crack[f][k]
+        })
+    })
+}
+
+/// The neighbour `u` of `c` whose edge best continues the direction from `v` to `c` (rest
+/// positions): the largest cosine, if any neighbour is ahead at all.
+fn continuation(mesh: &ShellMesh, v: u32, c: u32) -> Option<u32> {
+    let x = mesh.vertices();
+    let dir = sub(x[c as usize], x[v as usize]);
+    let mut best: Option<(f64, u32)> = None;
+    for &(k, role) in mesh.stencil(c as usize) {
+        let e = mesh.edges()[k as usize];
+        let u = match role {
+            Role::Start => e.v[1],
+            Role::End => e.v[0],
+            _ => continue,
+        };
+        if u == v {
+            continue;
+        }
+        let d = sub(x[u as usize], x[c as usize]);
+        let cos = dot(d, dir) / (dot(d, d) * dot(dir, dir)).sqrt();
+        if cos > 0.0 && best.is_none_or(|(b, _)| cos > b) {
+            best = Some((cos, u));
+        }
+    }
+    best.map(|(_, u)| u)
+}
+
+/// Whether moving vertex `c` to rest position `target` keeps every triangle around it above
+/// MIN_ANGLE and facing the same way.
+fn budge_keeps_quality(mesh: &ShellMesh, around: &[usize], c: u32, target: Vec3) -> bool {
+    let x = mesh.vertices();
+    around.iter().all(|&f| {
+        let t = mesh.triangles()[f];
+        let old = t.map(|i| x[i as usize]);
+        let new = t.map(|i| if i == c { target } else { x[i as usize] });
+        let n0 = cross(sub(old[1], old[0]), sub(old[2], old[0]));
+        let n1 = cross(sub(new[1], new[0]), sub(new[2], new[0]));
+        dot(n0, n1) > 0.0 && min_angle(new) >= MIN_ANGLE
+    })
+}
+
+/// Splits every vertex whose triangles form more than one fan once the cracked edges are taken
+/// out: the fan holding its lowest-numbered triangle keeps the vertex, each other fan gets a
+/// copy (rest and current position, velocity).
+fn open_cracks(edit: &mut Edit, x: &mut Vec<Vec3>, v: &mut Vec<Vec3>) {
+    let n = edit.rest.len();
+    let mut start = vec![0usize; n + 1];
+    for t in &edit.tris {
+        for &i in t {
+            start[i as usize + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut around = vec![0usize; start[n]];
+    for (f, t) in edit.tris.iter().enumerate() {
+        for &i in t {
+            around[fill[i as usize]] = f;
+            fill[i as usize] += 1;
+        }
+    }
+    let mut parent: Vec<usize> = Vec::new();
+    fn root(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for vert in 0..n {
+        let faces = &around[start[vert]..start[vert + 1]];
+        if faces.len() < 2 {
+            continue;
+        }
+        parent.clear();
+        parent.extend(0..faces.len());
+        // Two triangles at this vertex join through an edge (vert, o) they share unless
+        // either marks it cracked.
+        for (k1, &f1) in faces.iter().enumerate() {
+            for (k2, &f2) in faces.iter().enumerate().skip(k1 + 1) {
+                let (t1, t2) = (edit.tris[f1], edit.tris[f2]);
+                for l1 in 0..3 {
+                    let o = t1[l1];
+                    if o as usize == vert || !t2.contains(&o) {
+                        continue;
+                    }
+                    let l2 = (0..3).find(|&l| t2[l] != o && t2[l] as usize != vert);
+                    let Some(l2) = l2 else { continue };
+                    // The shared edge (vert, o) is opposite the third vertex in each triangle.
+                    let e1 = (0..3).find(|&l| t1[l] != o && t1[l] as usize != vert);
+                    let Some(e1) = e1 else { continue };
+                    if edit.crack[f1][e1] || edit.crack[f2][l2] {
+                        continue;
+                    }
+                    let (r1, r2) = (root(&mut parent, k1), root(&mut parent, k2));
+                    parent[r1] = r2;
+                }
+            }
+        }
+        let mut fans: Vec<usize> = (0..faces.len())
+            .map(|k| root(&mut parent, k))
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        if fans.len() < 2 {
+            continue;
+        }
+        // The fan of the lowest-numbered triangle keeps the vertex.
+        let first = root(&mut parent, 0);
+        fans.retain(|&r| r != first);
+        for r in fans {
+            let copy = edit.rest.len() as u32;
+            edit.rest.push(edit.rest[vert]);
+            x.push(x[vert]);
+            v.push(v[vert]);
+            edit.added.push([vert as u32, vert as u32]);
+            for (k, &f) in faces.iter().enumerate() {
+                if root(&mut parent, k) == r {
+                    for i in edit.tris[f].iter_mut() {
+                        if *i as usize == vert {
+                            *i = copy;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
