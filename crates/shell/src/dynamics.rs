@@ -8,6 +8,18 @@ use perifrac_physics::lanczos_frequency_of;
 use perifrac_physics::math::{axpy, dot, norm, scale, sub, Vec3};
 use perifrac_physics::stable_step::{LANCZOS_ITERATIONS, LANCZOS_TOLERANCE};
 
+/// What a trial step can change, kept to undo it: buffers reused from trial to trial.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Snapshot {
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    f: Vec<Vec3>,
+    ps: Vec<[f64; 3]>,
+    pphi: Vec<[f64; 3]>,
+    elastic: f64,
+    time: f64,
+}
+
 /// A shell moving under its elastic forces, gravity and pinned vertices, stepped explicitly.
 #[derive(Debug, Clone)]
 pub struct ExplicitShell {
@@ -45,6 +57,42 @@ impl ExplicitShell {
     /// The model.
     pub fn model(&self) -> &ShellModel {
         &self.model
+    }
+
+    /// The model, to query at other positions (its force buffers change).
+    pub fn model_mut(&mut self) -> &mut ShellModel {
+        &mut self.model
+    }
+
+    /// Copies the state a step changes into `s` (no allocation once its buffers fit).
+    pub(crate) fn save(&self, s: &mut Snapshot) {
+        s.x.clone_from(&self.x);
+        s.v.clone_from(&self.v);
+        s.f.clone_from(&self.f);
+        self.model.save_plastic(&mut s.ps, &mut s.pphi);
+        s.elastic = self.elastic;
+        s.time = self.time;
+    }
+
+    /// Puts back what [`ExplicitShell::save`] kept (the mesh must not have changed between).
+    pub(crate) fn restore(&mut self, s: &Snapshot) {
+        self.x.clone_from(&s.x);
+        self.v.clone_from(&s.v);
+        self.f.clone_from(&s.f);
+        self.model.restore_plastic(&s.ps, &s.pphi);
+        self.elastic = s.elastic;
+        self.time = s.time;
+    }
+
+    /// The largest force (N) on any free vertex at the current positions.
+    pub fn largest_force(&self) -> f64 {
+        self.f
+            .iter()
+            .zip(&self.pinned)
+            .filter(|(_, &p)| !p)
+            .map(|(f, _)| dot(*f, *f))
+            .fold(0.0, f64::max)
+            .sqrt()
     }
 
     /// Vertex positions (m).

@@ -18,11 +18,15 @@ use perifrac_physics::math::{add, cross, dot, norm, scale, sub, Vec3};
 use crate::error::ShellError;
 use crate::mesh::{Role, ShellMesh, NONE};
 use crate::model::ShellModel;
-use crate::plastic::combine;
+use crate::plastic::{combine, coordinates};
 
 /// No split or budge makes a triangle with an angle under this (deg); a split that would goes
 /// through the nearer vertex instead.
 pub const MIN_ANGLE: f64 = 15.0;
+
+/// No split makes an edge shorter than this share of the mesh's shortest edge at the start:
+/// splits within splits would otherwise shrink triangles (and the stable step) without bound.
+pub const MIN_EDGE_SHARE: f64 = 0.25;
 
 /// When a shell breaks.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,11 +39,21 @@ pub struct ShellFracture {
     /// A split point closer than this share of its edge's length to an end budges that vertex
     /// instead (dimensionless, in [0, 0.5); default 0.25; 0 never budges).
     pub budge: f64,
+    /// Share of the stress across a new crack that the triangles beside it give up into their
+    /// plastic offsets (in [0, 1]; default 1: a free edge carries none): the paper's
+    /// absorption of elastic strain at the crack, which takes the broken triangles' energy
+    /// and keeps them from breaking again at once.
+    pub release: f64,
 }
 
 impl ShellFracture {
-    /// Checks the thresholds are finite and > 0 and `budge` in [0, 0.5).
-    pub fn new(tensile: f64, compressive: f64, budge: f64) -> Result<ShellFracture, ShellError> {
+    /// Checks the thresholds are finite and > 0, `budge` in [0, 0.5) and `release` in [0, 1].
+    pub fn new(
+        tensile: f64,
+        compressive: f64,
+        budge: f64,
+        release: f64,
+    ) -> Result<ShellFracture, ShellError> {
         for (what, value) in [
             ("shell tensile fracture strain", tensile),
             ("shell compressive fracture strain", compressive),
@@ -59,10 +73,18 @@ impl ShellFracture {
                 value: budge,
             });
         }
+        if !(0.0..=1.0).contains(&release) {
+            return Err(ShellError::BadSetting {
+                what: "shell release share",
+                expected: "in [0, 1]",
+                value: release,
+            });
+        }
         Ok(ShellFracture {
             tensile,
             compressive,
             budge,
+            release,
         })
     }
 }
@@ -71,6 +93,9 @@ impl ShellFracture {
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct FractureState {
     pub params: ShellFracture,
+    /// No split makes an edge shorter than this (m): MIN_EDGE_SHARE of the shortest edge
+    /// the mesh had when fracture was switched on.
+    pub min_edge: f64,
     /// Per triangle, whether its edge opposite each vertex is a crack.
     pub crack: Vec<[bool; 3]>,
 }
@@ -190,8 +215,15 @@ impl ShellModel {
         if self.plastic.is_none() {
             self.plastic = Some(crate::plastic::PlasticState::new(None, nf));
         }
+        let shortest = self
+            .rest_length2
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min)
+            .sqrt();
         self.fracture = Some(FractureState {
             params,
+            min_edge: MIN_EDGE_SHARE * shortest,
             crack: vec![[false; 3]; nf],
         });
         self
@@ -280,6 +312,7 @@ impl ShellModel {
             return Ok(report);
         };
         let budge = fs.params.budge;
+        let min_edge = fs.min_edge;
         let nf = self.faces.len();
         let n0 = x.len();
         // Elastic coordinates before the round, for the triangles a budge changes.
@@ -316,6 +349,9 @@ impl ShellModel {
         };
         let mut touched = vec![false; nf];
         let mut absorb: BTreeSet<usize> = BTreeSet::new();
+        // The triangles beside a new crack, with the crack's rest direction: the stress across
+        // the crack goes (`release` of it).
+        let mut released: std::collections::BTreeMap<usize, Vec3> = Default::default();
         for &(f, ratio, dir) in &over {
             if touched[f] {
                 continue;
@@ -356,12 +392,17 @@ impl ShellModel {
             // A split whose pieces would have an angle under MIN_ANGLE (the secondary split's
             // included), or that falls within `budge` of an end, goes through the nearer end
             // instead.
-            let mut sliver = min_angle([rv, ra, rq]).min(min_angle([rv, rq, rb])) < MIN_ANGLE;
+            let short = |p: Vec3| norm(sub(p, rq)) < min_edge;
+            let mut sliver = min_angle([rv, ra, rq]).min(min_angle([rv, rq, rb])) < MIN_ANGLE
+                || short(rv)
+                || short(ra)
+                || short(rb);
             if g != NONE {
                 let gt = mesh.triangles()[g as usize];
                 if let Some(&w) = gt.iter().find(|&&w| w != a && w != b) {
                     let rw = mesh.vertices()[w as usize];
-                    sliver |= min_angle([rw, rb, rq]).min(min_angle([rw, rq, ra])) < MIN_ANGLE;
+                    sliver |= min_angle([rw, rb, rq]).min(min_angle([rw, rq, ra])) < MIN_ANGLE
+                        || short(rw);
                 }
             }
             let near = if t < budge || (sliver && t < 0.5) {
@@ -387,6 +428,11 @@ impl ShellModel {
                 }
                 let fresh = cut.iter().any(|&(p, q)| !is_crack(mesh, &edit, p, q));
                 if !fresh {
+                    // The line runs along a crack already there: the triangle is beside it and
+                    // the crack cannot take the stress across it, so that stress goes (as for
+                    // the triangles beside a new crack); nothing breaks.
+                    released.insert(f, sub(edit.rest[c as usize], rv));
+                    touched[f] = true;
                     continue;
                 }
                 // Budge: c moves onto the line (rest and current positions) when it is not on
@@ -399,6 +445,12 @@ impl ShellModel {
                 }
                 for &(p, q) in &cut {
                     let faces = faces_around(mesh, p);
+                    let along = sub(edit.rest[q as usize], edit.rest[p as usize]);
+                    for &g in &faces {
+                        if mesh.triangles()[g].contains(&q) {
+                            released.insert(g, along);
+                        }
+                    }
                     let faces: Vec<u32> = faces.iter().map(|&f| f as u32).collect();
                     edit.mark(p, q, &faces);
                 }
@@ -420,6 +472,8 @@ impl ShellModel {
             edit.split(f, i, q, t);
             touched[f] = true;
             touched.push(true);
+            released.insert(f, sub(rq, rv));
+            released.insert(edit.tris.len() - 1, sub(rq, rv));
             if g != NONE {
                 let gt = edit.tris[g as usize];
                 // g runs b -> a; its vertex opposite the edge splits it from b towards a.
@@ -429,6 +483,9 @@ impl ShellModel {
                 edit.split(g as usize, j, q, 1.0 - t);
                 touched[g as usize] = true;
                 touched.push(true);
+                let along = sub(rq, edit.rest[edit.tris[g as usize][j] as usize]);
+                released.insert(g as usize, along);
+                released.insert(edit.tris.len() - 1, along);
             }
             report.events.push(FractureEvent {
                 face: f,
@@ -453,7 +510,12 @@ impl ShellModel {
         }
         // A budge changes the strains of the triangles around the vertex; the plastic offsets
         // take the change, so their elastic strain coordinates stay as they were.
-        if !absorb.is_empty() {
+        // Then the triangles beside the new cracks lose `release` of the stress across the
+        // crack (the paper's absorption of elastic strain at the crack, limited to what a
+        // free edge cannot carry): the energy that broke them goes, the stress along the
+        // crack stays, and they do not break again at once on the strain they had.
+        let release = self.fracture.as_ref().map_or(0.0, |f| f.params.release);
+        if !absorb.is_empty() || (release > 0.0 && !released.is_empty()) {
             self.edge_pass(x);
             let fe = self.mesh.face_edges().to_vec();
             if let Some(pl) = &mut self.plastic {
@@ -463,10 +525,62 @@ impl ShellModel {
                         pl.phi[f][k] = self.edge_work[e as usize].dphi - elastic[f].1[k];
                     }
                 }
+                let nu = self.material.poisson;
+                let rest = self.mesh.vertices();
+                for (&f, &along) in &released {
+                    let t = self.mesh.triangles()[f].map(|i| rest[i as usize]);
+                    let r = &self.faces[f];
+                    let dir = in_plane(t, along);
+                    let s: [f64; 3] = fe[f].map(|e| self.edge_work[e as usize].s);
+                    let d: [f64; 3] = fe[f].map(|e| self.edge_work[e as usize].dphi);
+                    let es = [s[0] - pl.s[f][0], s[1] - pl.s[f][1], s[2] - pl.s[f][2]];
+                    let ed = [
+                        d[0] - pl.phi[f][0],
+                        d[1] - pl.phi[f][1],
+                        d[2] - pl.phi[f][2],
+                    ];
+                    let keep_m = free_edge(combine(&r.m, es), dir, nu);
+                    let keep_c = free_edge(combine(&r.n, ed), dir, nu);
+                    let (cm, cc) = (coordinates(&r.m, keep_m), coordinates(&r.n, keep_c));
+                    for k in 0..3 {
+                        pl.s[f][k] += release * (es[k] - cm[k]);
+                        pl.phi[f][k] += release * (ed[k] - cc[k]);
+                    }
+                }
             }
         }
         Ok(report)
     }
+}
+
+/// The unit direction, in the rest frame of triangle `p` (`u` along `p0 -> p1`, `w = n x u`),
+/// of the rest vector `d`.
+fn in_plane(p: [Vec3; 3], d: Vec3) -> [f64; 2] {
+    let e = sub(p[1], p[0]);
+    let u = scale(e, 1.0 / norm(e));
+    let n = cross(e, sub(p[2], p[0]));
+    let w = cross(scale(n, 1.0 / norm(n)), u);
+    let (a, b) = (dot(d, u), dot(d, w));
+    let l = (a * a + b * b).sqrt();
+    if l > 0.0 {
+        [a / l, b / l]
+    } else {
+        [1.0, 0.0]
+    }
+}
+
+/// The strain `[xx, yy, xy]` left when a free edge along unit `t` takes the stress across it
+/// (plane stress, Poisson's ratio `nu`): only the stress along the edge stays,
+/// `sigma_tt = Y (e_tt + nu e_nn) / (1 - nu^2)`, whose strain is `sigma_tt / Y (t t - nu n n)`.
+fn free_edge(e: [f64; 3], t: [f64; 2], nu: f64) -> [f64; 3] {
+    let n = [-t[1], t[0]];
+    let along = |a: [f64; 2]| a[0] * a[0] * e[0] + a[1] * a[1] * e[1] + 2.0 * a[0] * a[1] * e[2];
+    let s = (along(t) + nu * along(n)) / (1.0 - nu * nu);
+    [
+        s * (t[0] * t[0] - nu * n[0] * n[0]),
+        s * (t[1] * t[1] - nu * n[1] * n[1]),
+        s * (t[0] * t[1] - nu * n[0] * n[1]),
+    ]
 }
 
 /// The smallest interior angle (deg) of a triangle.

@@ -28,6 +28,7 @@ pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod plastic;
+pub mod search;
 
 pub use dynamics::{max_frequency, ExplicitShell};
 pub use error::ShellError;
@@ -37,3 +38,4 @@ pub use mesh::{Edge, Role, ShellMesh, NONE};
 pub use model::{dihedral, phi, FaceStrain, ShellModel};
 pub use perifrac_physics::Vec3;
 pub use plastic::ShellYield;
+pub use search::{SearchStats, SearchedShell, ShellSearch};

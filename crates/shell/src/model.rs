@@ -107,7 +107,7 @@ pub struct ShellModel {
     pub(crate) mesh: ShellMesh,
     pub(crate) material: ShellMaterial,
     pub(crate) faces: Vec<FaceRest>,
-    rest_length2: Vec<f64>,
+    pub(crate) rest_length2: Vec<f64>,
     rest_phi: Vec<f64>,
     rest_theta: Vec<f64>,
     masses: Vec<f64>,
@@ -393,6 +393,28 @@ impl ShellModel {
     /// The yield parameters, when the shell yields.
     pub fn yield_params(&self) -> Option<ShellYield> {
         self.plastic.as_ref().and_then(|p| p.params)
+    }
+
+    /// Copies the plastic offsets into `s`, `phi` (left empty for a shell without them).
+    pub(crate) fn save_plastic(&self, s: &mut Vec<[f64; 3]>, phi: &mut Vec<[f64; 3]>) {
+        match &self.plastic {
+            Some(p) => {
+                s.clone_from(&p.s);
+                phi.clone_from(&p.phi);
+            }
+            None => {
+                s.clear();
+                phi.clear();
+            }
+        }
+    }
+
+    /// Puts back offsets saved by [`ShellModel::save_plastic`].
+    pub(crate) fn restore_plastic(&mut self, s: &[[f64; 3]], phi: &[[f64; 3]]) {
+        if let Some(p) = &mut self.plastic {
+            p.s.copy_from_slice(s);
+            p.phi.copy_from_slice(phi);
+        }
     }
 
     /// Triangles that yielded in the last [`ShellModel::forces`].

@@ -76,6 +76,10 @@ fn crack_tilt(m: &ShellModel) -> (f64, usize) {
 /// end columns at `speed` m/s each, damped at `damping` 1/s; it breaks at a principal strain
 /// of 1e-3.
 fn notched_sheet(budge: f64, speed: f64, damping: f64) -> ExplicitShell {
+    notched(budge, 1.0, speed, damping)
+}
+
+fn notched(budge: f64, release: f64, speed: f64, damping: f64) -> ExplicitShell {
     let s = sheet(0.1, 0.05, 20, 10).unwrap();
     let notch = s
         .vertices
@@ -94,7 +98,7 @@ fn notched_sheet(budge: f64, speed: f64, damping: f64) -> ExplicitShell {
     let glass = ShellMaterial::new(70e9, 0.22, 2500.0, 1e-3).unwrap();
     let model = ShellModel::new(mesh, glass)
         .unwrap()
-        .with_fracture(ShellFracture::new(1e-3, 1e-3, budge).unwrap());
+        .with_fracture(ShellFracture::new(1e-3, 1e-3, budge, release).unwrap());
     let mut shell = ExplicitShell::new(model).unwrap();
     shell.set_damping(damping).unwrap();
     for (i, p) in verts.iter().enumerate() {
@@ -131,10 +135,11 @@ fn a_notched_sheet_pulled_apart_breaks_across_the_load_into_valid_pieces() {
         "first break {first:?}, {events} events, {n} pieces, {count} crack edges, crack line {tilt:.1} deg from the y axis, min angle {:.1} deg",
         min_angle(m.mesh()),
     );
-    assert_eq!(n, 2);
+    // Two pieces, or three when a chip comes off the crack in the round that parts it.
+    assert!((2..=3).contains(&n), "{n}");
     // Perpendicular to the pull (x): the crack line runs along y. Its edges zigzag over the
     // triangles (each within 45 deg of it), but their principal axis is the line: measured
-    // 0.1 deg off y; 10 deg allows a zigzag of a cell either way over the 5 cm.
+    // 0.3 deg off y; 10 deg allows a zigzag of a cell either way over the 5 cm.
     assert!(tilt < 10.0, "{tilt}");
 }
 
@@ -143,8 +148,9 @@ fn fracture_keeps_every_triangle_above_the_angle_bound_and_the_mass() {
     // The notched sheet pulled for 3,000 steps, past its first break (at step 1,542):
     // rounds of splits and budges, the pieces flung apart. No triangle may ever have an angle
     // under perifrac_shell::fracture::MIN_ANGLE (15 deg; the sheet starts at 45), the mass
-    // must stay (splits and budges move mass between vertices only: measured 3e-16), and the
-    // cracks stay in the band around the notch (measured 4.3 to 5.7 cm).
+    // must stay (splits and budges move mass between vertices only: measured 0 and 1e-16), and
+    // the cracks stay within 4 cells of the notch line (measured 3.25 to 6.5 cm): the sheet
+    // parts at the notch and chips along the crack, it does not break elsewhere.
     for budge in [0.0, 0.25] {
         let mut shell = notched_sheet(budge, 0.05, 2e4);
         let mut dt = 0.5 * shell.stable_step().unwrap();
@@ -184,6 +190,70 @@ fn fracture_keeps_every_triangle_above_the_angle_bound_and_the_mass() {
         assert!(events > 0);
         assert!(worst >= fracture::MIN_ANGLE - 1e-9, "{worst}");
         assert!(((mass - mass0) / mass0).abs() < 1e-12);
-        assert!(band.0 > 0.035 && band.1 < 0.065, "{band:?}");
+        assert!(band.0 > 0.03 && band.1 < 0.07, "{band:?}");
     }
+}
+
+#[test]
+fn the_search_without_rejections_is_the_plain_step() {
+    // Nothing breaks and the force may grow without limit: the search takes whole steps at
+    // level 0, which must be the plain step bit for bit.
+    let s = sheet(0.1, 0.05, 10, 5).unwrap();
+    let mesh = ShellMesh::new(s.vertices.clone(), s.triangles.clone()).unwrap();
+    let glass = ShellMaterial::new(70e9, 0.22, 2500.0, 1e-3).unwrap();
+    let mut plain = ExplicitShell::new(ShellModel::new(mesh, glass).unwrap()).unwrap();
+    for (i, v) in plain.velocities_mut().iter_mut().enumerate() {
+        *v = [0.0, 0.0, 0.01 * (i % 7) as f64];
+    }
+    let config = ShellSearch {
+        force_growth: f64::MAX,
+        ..ShellSearch::default()
+    };
+    let mut searched = SearchedShell::new(plain.clone(), config).unwrap();
+    let dt = 0.5 * plain.stable_step().unwrap();
+    for _ in 0..200 {
+        plain.step(dt).unwrap();
+        searched.advance(dt).unwrap();
+    }
+    assert_eq!(plain.positions(), searched.shell().positions());
+    assert_eq!(plain.velocities(), searched.shell().velocities());
+    assert_eq!(searched.stats().rejected, 0);
+    assert_eq!(searched.stats().substeps, 200);
+}
+
+#[test]
+fn the_search_finds_the_break_and_undoes_whole_trials() {
+    // The notched sheet under the search (paper's settings, k_max = 10): the first break is
+    // found at the finest level, every trial it discards is undone whole (the mass, the mesh
+    // and the state are those of an accepted step: the run goes on to part the sheet), and
+    // the crack crosses the sheet.
+    let shell = notched_sheet(0.25, 0.05, 2e4);
+    let mut s = SearchedShell::new(shell, ShellSearch::default()).unwrap();
+    let dt = 0.5 * s.shell_mut().stable_step().unwrap();
+    let mass0: f64 = s.shell().model().masses().iter().sum();
+    let mut parted = None;
+    for step in 0..3000 {
+        s.advance(dt).unwrap();
+        if parted.is_none() && pieces(s.shell().model().mesh()) >= 2 {
+            parted = Some(step);
+        }
+    }
+    let st = s.stats();
+    let m = s.shell().model();
+    let mass: f64 = m.masses().iter().sum();
+    let (tilt, count) = crack_tilt(m);
+    eprintln!(
+        "parted at step {parted:?}; {} events, {} pieces, {} sub-steps, {} discarded ({} for force, {} for fracture), crack {tilt:.1} deg from y over {count} edges",
+        st.events.len(),
+        pieces(m.mesh()),
+        st.substeps,
+        st.rejected,
+        st.rejected_force,
+        st.rejected_fracture
+    );
+    assert!(parted.is_some());
+    assert!(st.rejected_fracture > 0);
+    assert!(((mass - mass0) / mass0).abs() < 1e-12);
+    // The crack and the chips along it (8 pieces by step 3,000): measured 10.5 deg from y.
+    assert!(tilt < 15.0, "{tilt}");
 }

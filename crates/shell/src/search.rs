@@ -1,0 +1,189 @@
+//! The paper's simulation loop (Gingold et al. 2004): each step of length `dt` is covered by
+//! sub-steps of `dt 2^-k`; a trial sub-step is discarded whole (positions, velocities, forces,
+//! plastic state) and retried at `k + 1` when the largest force grew by more than a factor or
+//! a triangle would break in it (past its threshold by more than `overshoot`). At
+//! `k = levels` a sub-step is always taken. After a sub-step is taken the plastic state is
+//! updated (inside its force pass), over-strained triangles break, and `k` falls by one; `k`
+//! carries over from step to step, so steps stay fine while forces keep jumping.
+
+use crate::dynamics::{ExplicitShell, Snapshot};
+use crate::error::ShellError;
+use crate::fracture::FractureEvent;
+
+/// The search's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellSearch {
+    /// Finest level `k_max` (at most 20; the paper uses 10).
+    pub levels: u32,
+    /// A trial is discarded when the largest force after it passes this factor times the
+    /// largest before it (> 1; the paper's 1.1).
+    pub force_growth: f64,
+    /// ... or when a triangle in it passes its fracture threshold by more than this share
+    /// (>= 0; 0, the paper's: every fracture is found at the finest level).
+    pub overshoot: f64,
+    /// Forces under this share of the largest seen so far cannot reject a trial for growing
+    /// (in [0, 1)): a shell starting at rest has no force to grow from.
+    pub force_floor: f64,
+}
+
+impl Default for ShellSearch {
+    fn default() -> Self {
+        ShellSearch {
+            levels: 10,
+            force_growth: 1.1,
+            overshoot: 0.0,
+            force_floor: 1e-3,
+        }
+    }
+}
+
+impl ShellSearch {
+    /// Refuses settings out of range.
+    pub fn check(&self) -> Result<(), ShellError> {
+        let bad = |what, expected, value| {
+            Err(ShellError::BadSetting {
+                what,
+                expected,
+                value,
+            })
+        };
+        if self.levels > 20 {
+            return bad("shell search levels", "at most 20", self.levels as f64);
+        }
+        if self.force_growth.is_nan() || self.force_growth <= 1.0 {
+            return bad("shell search force growth", "above 1", self.force_growth);
+        }
+        if self.overshoot.is_nan() || self.overshoot < 0.0 {
+            return bad("shell search overshoot", ">= 0", self.overshoot);
+        }
+        if !(0.0..1.0).contains(&self.force_floor) {
+            return bad("shell search force floor", "in [0, 1)", self.force_floor);
+        }
+        Ok(())
+    }
+}
+
+/// What the search did over one or more steps.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SearchStats {
+    /// Sub-steps taken.
+    pub substeps: u64,
+    /// Trial sub-steps discarded.
+    pub rejected: u64,
+    /// Of those, for a force that grew too fast.
+    pub rejected_force: u64,
+    /// Of those, for a triangle that would break.
+    pub rejected_fracture: u64,
+    /// Triangles broken.
+    pub events: Vec<FractureEvent>,
+}
+
+/// An explicit shell stepped by the search: the shell, the settings, the current level and the
+/// largest force seen.
+#[derive(Debug, Clone)]
+pub struct SearchedShell {
+    shell: ExplicitShell,
+    config: ShellSearch,
+    k: u32,
+    peak: f64,
+    stats: SearchStats,
+    snapshot: Snapshot,
+}
+
+impl SearchedShell {
+    /// Wraps `shell`; checks the settings.
+    pub fn new(shell: ExplicitShell, config: ShellSearch) -> Result<SearchedShell, ShellError> {
+        config.check()?;
+        let peak = shell.largest_force();
+        Ok(SearchedShell {
+            shell,
+            config,
+            k: 0,
+            peak,
+            stats: SearchStats::default(),
+            snapshot: Snapshot::default(),
+        })
+    }
+
+    /// The shell.
+    pub fn shell(&self) -> &ExplicitShell {
+        &self.shell
+    }
+
+    /// The shell, to change (velocities, pins).
+    pub fn shell_mut(&mut self) -> &mut ExplicitShell {
+        &mut self.shell
+    }
+
+    /// What the search did so far.
+    pub fn stats(&self) -> &SearchStats {
+        &self.stats
+    }
+
+    /// The level of the next trial sub-step.
+    pub fn level(&self) -> u32 {
+        self.k
+    }
+
+    /// Covers one step of `dt` (s) by sub-steps.
+    pub fn advance(&mut self, dt: f64) -> Result<(), ShellError> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(ShellError::BadSetting {
+                what: "shell time step (s)",
+                expected: "finite and > 0",
+                value: dt,
+            });
+        }
+        let levels = self.config.levels;
+        let full = 1u64 << levels;
+        let mut done = 0u64;
+        let breaks = self.shell.model().fracture_params().is_some();
+        let mut before = self.shell.largest_force();
+        while done < full {
+            let units = (full >> self.k).min(full - done);
+            let trial = self.k < levels;
+            if trial {
+                self.shell.save(&mut self.snapshot);
+            }
+            self.shell.step(dt * units as f64 / full as f64)?;
+            let after = self.shell.largest_force();
+            // From no force at all (a shell at rest) any force is infinite growth: no trial
+            // is judged against nothing.
+            let grew = before > 0.0
+                && after > self.config.force_growth * before
+                && after > self.config.force_floor * self.peak;
+            let cracks = breaks && {
+                let x = self.shell.positions().to_vec();
+                let worst = self
+                    .shell
+                    .model_mut()
+                    .fracture_ratios(&x)?
+                    .iter()
+                    .fold(0.0f64, |m, r| m.max(r.0));
+                worst > 1.0 + self.config.overshoot
+            };
+            if trial && (grew || cracks) {
+                self.shell.restore(&self.snapshot);
+                self.k += 1;
+                self.stats.rejected += 1;
+                if grew {
+                    self.stats.rejected_force += 1;
+                } else {
+                    self.stats.rejected_fracture += 1;
+                }
+                continue;
+            }
+            if breaks {
+                let r = self.shell.fracture()?;
+                self.stats.events.extend(r.events);
+            }
+            let after = self.shell.largest_force();
+            self.peak = self.peak.max(after);
+            before = after;
+            done += units;
+            self.stats.substeps += 1;
+            self.k = self.k.saturating_sub(1);
+        }
+        Ok(())
+    }
+}
