@@ -1,6 +1,9 @@
 //! Explicit time stepping of a shell (Newmark with `beta = 0`, `gamma = 1/2`: velocity
 //! Verlet) and the estimate of its stable step.
 
+use perifrac_checkpoint::{Reader, Writer};
+use perifrac_contact::{Colliders, ContactStats};
+
 use crate::error::ShellError;
 use crate::fracture::FractureReport;
 use crate::model::ShellModel;
@@ -18,6 +21,8 @@ pub(crate) struct Snapshot {
     pphi: Vec<[f64; 3]>,
     elastic: f64,
     time: f64,
+    /// The colliders' moving state (balls).
+    colliders: Writer,
 }
 
 /// A shell moving under its elastic forces, gravity and pinned vertices, stepped explicitly.
@@ -32,6 +37,10 @@ pub struct ExplicitShell {
     damping: f64,
     elastic: f64,
     time: f64,
+    /// Ground planes and balls the vertices touch, with each vertex's contact radius (m).
+    colliders: Option<Colliders>,
+    radii: Vec<f64>,
+    contact: ContactStats,
 }
 
 impl ExplicitShell {
@@ -51,6 +60,9 @@ impl ExplicitShell {
             damping: 0.0,
             elastic,
             time: 0.0,
+            colliders: None,
+            radii: Vec::new(),
+            contact: ContactStats::default(),
         })
     }
 
@@ -72,6 +84,10 @@ impl ExplicitShell {
         self.model.save_plastic(&mut s.ps, &mut s.pphi);
         s.elastic = self.elastic;
         s.time = self.time;
+        s.colliders.clear();
+        if let Some(c) = &self.colliders {
+            c.save(&mut s.colliders);
+        }
     }
 
     /// Puts back what [`ExplicitShell::save`] kept (the mesh must not have changed between).
@@ -82,6 +98,10 @@ impl ExplicitShell {
         self.model.restore_plastic(&s.ps, &s.pphi);
         self.elastic = s.elastic;
         self.time = s.time;
+        if let Some(c) = &mut self.colliders {
+            // Saved from these very colliders a moment ago: it reads back.
+            let _ = c.restore(&mut Reader::new(s.colliders.bytes()));
+        }
     }
 
     /// The largest force (N) on any free vertex at the current positions.
@@ -143,6 +163,35 @@ impl ExplicitShell {
         Ok(())
     }
 
+    /// Lets the vertices touch `colliders` (ground planes, balls) as spheres of `radius` (m;
+    /// the paper's repulsion band is half the thickness). Refuses a vertex that starts inside
+    /// a collider.
+    pub fn set_colliders(&mut self, colliders: Colliders, radius: f64) -> Result<(), ShellError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(ShellError::BadSetting {
+                what: "shell contact radius (m)",
+                expected: "finite and > 0",
+                value: radius,
+            });
+        }
+        self.radii = vec![radius; self.x.len()];
+        colliders
+            .check_clear(&self.x, &self.radii)
+            .map_err(|cause| ShellError::Contact(cause.to_string()))?;
+        self.colliders = Some(colliders);
+        Ok(())
+    }
+
+    /// The colliders, when set.
+    pub fn colliders(&self) -> Option<&Colliders> {
+        self.colliders.as_ref()
+    }
+
+    /// What contact found in the last step.
+    pub fn contact_stats(&self) -> ContactStats {
+        self.contact
+    }
+
     /// Holds vertex `i` where it is (and at rest) from now on.
     pub fn pin(&mut self, i: usize) {
         self.drive(i, [0.0; 3]);
@@ -200,8 +249,21 @@ impl ExplicitShell {
             *x = axpy(*x, dt, *v);
         }
         self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        if let Some(c) = &mut self.colliders {
+            self.contact = c.step(
+                dt,
+                &self.x,
+                &self.v,
+                self.model.masses(),
+                &self.radii,
+                &mut self.f,
+            );
+        }
         self.kick(0.5 * dt);
         self.time += dt;
+        if !self.elastic.is_finite() {
+            return Err(ShellError::RanAway { time: self.time });
+        }
         Ok(())
     }
 
@@ -232,6 +294,9 @@ impl ExplicitShell {
         for src in &report.added {
             let pinned = self.pinned[src[0] as usize] && self.pinned[src[1] as usize];
             self.pinned.push(pinned);
+            if let Some(&r) = self.radii.first() {
+                self.radii.push(r);
+            }
         }
         self.f.resize(self.x.len(), [0.0; 3]);
         self.elastic = self.model.forces(&self.x, &mut self.f)?;

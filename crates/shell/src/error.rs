@@ -102,6 +102,16 @@ pub enum ShellError {
         /// What the estimate gave (rad/s).
         omega: f64,
     },
+    /// Contact with the colliders was refused (a vertex starts inside one, say).
+    #[error("shell contact: {0}")]
+    Contact(String),
+    /// The energy became infinite or NaN: the step is too long for the mesh (after fracture
+    /// made it finer, say).
+    #[error("the shell ran away at t = {time:.6e} s (the time step is too long for its mesh)")]
+    RanAway {
+        /// Simulated time (s).
+        time: f64,
+    },
     /// Arrays that must match the vertex count do not.
     #[error("{what}: expected {expected} entries, got {got}")]
     LengthMismatch {
