@@ -21,6 +21,7 @@ mod facets;
 mod fit;
 pub mod look;
 mod plot;
+pub mod shells;
 pub mod speed;
 pub mod stability;
 mod table;

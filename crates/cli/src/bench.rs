@@ -1,4 +1,4 @@
-//! `perifrac bench accuracy | stability | events | contact | speed | look`: run the benchmark harness and write its
+//! `perifrac bench accuracy | stability | events | contact | speed | look | shells`: run the benchmark harness and write its
 //! Markdown report and PNG plots into a directory.
 
 use std::io::Write as _;
@@ -40,6 +40,9 @@ pub enum Which {
     /// Bond-update rates per material path, seconds per step at the paper's wall size, the
     /// topology's share of a step during heavy fracture, memory per bond, the implicit step.
     Speed(Common),
+    /// Thin shells: plates under their own weight against Kirchhoff at three resolutions, and
+    /// the event search on a dropped egg shell against plain steps.
+    Shells(Common),
     /// The cut surface: a split bar's crack roughness, the default wall's crack directions and
     /// fragment sizes at three resolutions, every piece checked closed and right side out.
     Look(Common),
@@ -65,6 +68,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Which::Events(c) => events_report(c),
         Which::Contact(c) => contact_report(c),
         Which::Look(c) => look_report(c),
+        Which::Shells(c) => shells_report(c),
     }
 }
 
@@ -185,6 +189,22 @@ fn contact_report(c: &Common) -> Result<()> {
     );
     md.push_str(&pile.to_markdown());
     report.write("contact", &md)?;
+    Ok(())
+}
+
+fn shells_report(c: &Common) -> Result<()> {
+    let report = Report::start(c)?;
+    let mut progress = report.progress();
+    let e = effort(c);
+    let plates = perifrac_bench::shells::plates(e, &mut progress)?;
+    let (egg, text) = perifrac_bench::shells::egg_drop(e, &mut progress)?;
+    let mut md = report.header("shells");
+    md.push_str("## Plates under their own weight against Kirchhoff\n\n");
+    md.push_str(&plates.to_markdown());
+    md.push_str("\n## The event search on a dropped egg shell (the paper's Figure 9)\n\n");
+    md.push_str(&format!("{text}\n\n"));
+    md.push_str(&egg.to_markdown());
+    report.write("shells", &md)?;
     Ok(())
 }
 
