@@ -332,3 +332,128 @@ pub fn egg_drop(
     );
     Ok((t, text))
 }
+
+/// Median of `runs` timings (s) of `f`.
+fn median_time(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let started = Instant::now();
+            f();
+            started.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// Speed of the shell's force pass and step: a glass sphere (3 cm, 0.5 mm) at two sizes,
+/// triangle updates per second per core on one and two threads, and the share of a step that
+/// contact with a ground plane and a ball takes (the step with colliders against without).
+pub fn speed(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, BenchError> {
+    let mut t = Table::new(&[
+        "sphere",
+        "triangles",
+        "force pass, 1 thread (ms)",
+        "triangle updates/s/core, 1 thread",
+        "force pass, 2 threads (ms)",
+        "triangle updates/s/core, 2 threads",
+        "step with colliders (ms)",
+        "contact share of the step",
+    ]);
+    let sizes: &[u32] = match effort {
+        Effort::Tiny => &[3],
+        Effort::Full => &[5, 6],
+    };
+    for &sub in sizes {
+        let case = format!("sphere, {sub} subdivisions");
+        progress(&format!("shells: speed, {case}"));
+        let s = generate::icosphere(0.03, sub).map_err(|e| BenchError::Mesh {
+            case: case.clone(),
+            message: e.to_string(),
+        })?;
+        let faces = s.triangles.len();
+        let lift = 0.03 + 0.25e-3 + 1e-4;
+        let v: Vec<_> = s
+            .vertices
+            .iter()
+            .map(|p| [p[0], p[1], p[2] + lift])
+            .collect();
+        let mesh = ShellMesh::new(v.clone(), s.triangles).map_err(shell_error(&case))?;
+        let glass = ShellMaterial::new(70e9, 0.22, 2500.0, 5e-4).map_err(shell_error(&case))?;
+        let mut model = ShellModel::new(mesh, glass).map_err(shell_error(&case))?;
+        // A deformed state, so every bending and membrane term is live.
+        let x: Vec<_> = v
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let w = 1e-5 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5);
+                [p[0] + w, p[1] - w, p[2] + 0.5 * w]
+            })
+            .collect();
+        let mut f = vec![[0.0; 3]; x.len()];
+        let runs = match effort {
+            Effort::Tiny => 3,
+            Effort::Full => 30,
+        };
+        let mut per_threads = Vec::new();
+        for threads in [1, 2] {
+            let pool = crate::speed::pool(threads)?;
+            let time = pool.install(|| {
+                median_time(runs, || {
+                    let _ = model.forces(&x, &mut f);
+                })
+            });
+            per_threads.push((time, faces as f64 / time / threads as f64));
+        }
+        // Steps with and without colliders: a ground under the sphere and a kinematic ball
+        // pressing on its top.
+        let ground = GroundDesc {
+            point: [0.0; 3],
+            normal: [0.0, 0.0, 1.0],
+            params: ContactParams::from_material(70e9, 2.5e-4, 1.0, 0.1, 0.3),
+        };
+        let ball = perifrac_contact::BallDesc {
+            center: [0.0, 0.0, 2.0 * lift + 0.01 + 2.6e-4],
+            radius: 0.01,
+            motion: perifrac_contact::BallMotion::Kinematic {
+                velocity: [0.0, 0.0, -1.0],
+            },
+            params: ContactParams::from_material(70e9, 2.5e-4, 1.0, 0.1, 0.3),
+        };
+        let plain = ExplicitShell::new(model.clone()).map_err(shell_error(&case))?;
+        let mut touching = plain.clone();
+        let colliders = Colliders::new(vec![ground], vec![ball], [0.0; 3])
+            .map_err(|e| shell_error(&case)(ShellError::Contact(e.to_string())))?;
+        touching
+            .set_colliders(colliders, 2.5e-4)
+            .map_err(shell_error(&case))?;
+        let mut plain = plain;
+        let dt = 0.5 * plain.stable_step().map_err(shell_error(&case))?;
+        let steps = 20;
+        let pool = crate::speed::pool(2)?;
+        let (bare, with) = pool.install(|| {
+            let bare = median_time(runs.min(10), || {
+                for _ in 0..steps {
+                    let _ = plain.step(dt);
+                }
+            });
+            let with = median_time(runs.min(10), || {
+                for _ in 0..steps {
+                    let _ = touching.step(dt);
+                }
+            });
+            (bare / steps as f64, with / steps as f64)
+        });
+        t.push(vec![
+            format!("{sub} subdivisions"),
+            faces.to_string(),
+            format!("{:.2}", 1e3 * per_threads[0].0),
+            format!("{:.2e}", per_threads[0].1),
+            format!("{:.2}", 1e3 * per_threads[1].0),
+            format!("{:.2e}", per_threads[1].1),
+            format!("{:.2}", 1e3 * with),
+            format!("{:.0}%", 100.0 * (1.0 - bare / with).max(0.0)),
+        ]);
+    }
+    Ok(t)
+}

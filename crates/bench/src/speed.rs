@@ -123,7 +123,7 @@ fn moving_block(
 }
 
 /// A rayon pool of `threads` workers.
-fn pool(threads: usize) -> Result<rayon::ThreadPool, BenchError> {
+pub(crate) fn pool(threads: usize) -> Result<rayon::ThreadPool, BenchError> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -104,6 +104,12 @@ impl ExplicitShell {
         }
     }
 
+    /// The largest fracture ratio at the current positions (see
+    /// [`ShellModel::worst_fracture_ratio`]).
+    pub fn worst_fracture_ratio(&mut self) -> Result<f64, ShellError> {
+        self.model.worst_fracture_ratio(&self.x)
+    }
+
     /// The largest force (N) on any free vertex at the current positions.
     pub fn largest_force(&self) -> f64 {
         self.f
@@ -175,6 +181,12 @@ impl ExplicitShell {
             });
         }
         self.radii = vec![radius; self.x.len()];
+        let mut colliders = colliders;
+        // One stiffness for every vertex: a per-particle scale would not follow the vertices
+        // fracture adds.
+        colliders
+            .set_stiffness_scale(Vec::new())
+            .map_err(|cause| ShellError::Contact(cause.to_string()))?;
         colliders
             .check_clear(&self.x, &self.radii)
             .map_err(|cause| ShellError::Contact(cause.to_string()))?;
@@ -288,7 +300,7 @@ impl ExplicitShell {
     /// the forces are evaluated on the new mesh.
     pub fn fracture(&mut self) -> Result<FractureReport, ShellError> {
         let report = self.model.fracture(&mut self.x, &mut self.v)?;
-        if report.events.is_empty() {
+        if !report.changed {
             return Ok(report);
         }
         for src in &report.added {
@@ -336,8 +348,9 @@ pub fn max_frequency(model: &mut ShellModel, x: &[Vec3]) -> Result<f64, ShellErr
         LANCZOS_ITERATIONS,
         LANCZOS_TOLERANCE,
         &mut |y: &[Vec3], f: &mut [Vec3]| {
-            // The lengths were checked above, so the evaluation cannot fail.
-            let _ = model.forces(y, f);
+            // The lengths were checked above, so the evaluation cannot fail; the plastic
+            // state is not return-mapped at the probe's positions.
+            let _ = model.frozen_forces(y, f);
         },
     );
     Ok(est.omega_max)

@@ -13,6 +13,8 @@
 
 use std::collections::BTreeSet;
 
+use rayon::prelude::*;
+
 use perifrac_physics::math::{add, cross, dot, norm, scale, sub, Vec3};
 
 use crate::error::ShellError;
@@ -37,10 +39,12 @@ pub struct ShellFracture {
     /// the paper uses one threshold for both).
     pub compressive: f64,
     /// A split point closer than this share of its edge's length to an end budges that vertex
-    /// instead (dimensionless, in [0, 0.5); default 0.25; 0 never budges).
+    /// instead (dimensionless, in [0, 0.5); the tests and benchmarks use 0.25; 0 never
+    /// budges).
     pub budge: f64,
     /// Share of the stress across a new crack that the triangles beside it give up into their
-    /// plastic offsets (in [0, 1]; default 1: a free edge carries none): the paper's
+    /// plastic offsets (in [0, 1]; 1, as the tests and benchmarks use: a free edge carries
+    /// none): the paper's
     /// absorption of elastic strain at the crack, which takes the broken triangles' energy
     /// and keeps them from breaking again at once.
     pub release: f64,
@@ -107,7 +111,8 @@ pub struct FractureEvent {
     pub face: usize,
     /// Its principal strain over the threshold (> 1).
     pub ratio: f64,
-    /// Whether a vertex was budged instead of a new one made.
+    /// Whether a vertex was budged (moved onto the line) instead of a new one made; false also
+    /// when the crack went along an existing edge without moving a vertex.
     pub budged: bool,
 }
 
@@ -119,26 +124,31 @@ pub struct FractureReport {
     /// For each vertex added (in order, after the old ones), the two vertices it came from:
     /// the ends of the edge it was put on, or the vertex it was split from twice.
     pub added: Vec<[u32; 2]>,
+    /// Whether the mesh or the rest state changed (also when no triangle broke but some
+    /// beside a crack gave up the stress across it).
+    pub changed: bool,
 }
 
-/// The largest-magnitude eigenvalue of a symmetric 2x2 `[xx, yy, xy]` and its unit eigenvector.
-fn principal(t: [f64; 3]) -> (f64, [f64; 2]) {
+/// The eigenvalues of a symmetric 2x2 `[xx, yy, xy]`, largest first, with the unit eigenvector
+/// of each.
+fn principal(t: [f64; 3]) -> [(f64, [f64; 2]); 2] {
     let mean = 0.5 * (t[0] + t[1]);
     let half = 0.5 * (t[0] - t[1]);
     let r = (half * half + t[2] * t[2]).sqrt();
-    let lambda = if mean >= 0.0 { mean + r } else { mean - r };
-    let (a, b) = ([t[2], lambda - t[0]], [lambda - t[1], t[2]]);
-    let v = if a[0] * a[0] + a[1] * a[1] >= b[0] * b[0] + b[1] * b[1] {
-        a
-    } else {
-        b
-    };
-    let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
-    if l > 0.0 {
-        (lambda, [v[0] / l, v[1] / l])
-    } else {
-        (lambda, [1.0, 0.0])
-    }
+    [mean + r, mean - r].map(|lambda| {
+        let (a, b) = ([t[2], lambda - t[0]], [lambda - t[1], t[2]]);
+        let v = if a[0] * a[0] + a[1] * a[1] >= b[0] * b[0] + b[1] * b[1] {
+            a
+        } else {
+            b
+        };
+        let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
+        if l > 0.0 {
+            (lambda, [v[0] / l, v[1] / l])
+        } else {
+            (lambda, [1.0, 0.0])
+        }
+    })
 }
 
 /// The rest triangle's vertices in its plane's frame (the frame of its strains: `u` along
@@ -271,14 +281,15 @@ impl ShellModel {
                 let mut best = (0.0, [1.0, 0.0]);
                 for z in [0.5 * h, -0.5 * h] {
                     let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
-                    let (l, dir) = principal(t);
-                    let ratio = if l >= 0.0 {
-                        l / params.tensile
-                    } else {
-                        -l / params.compressive
-                    };
-                    if ratio > best.0 {
-                        best = (ratio, dir);
+                    // The largest tension against the tensile threshold and the largest
+                    // compression against the compressive one: both, as they may differ.
+                    let [(hi, dhi), (lo, dlo)] = principal(t);
+                    for (ratio, dir) in
+                        [(hi / params.tensile, dhi), (-lo / params.compressive, dlo)]
+                    {
+                        if ratio > best.0 {
+                            best = (ratio, dir);
+                        }
                     }
                 }
                 best
@@ -289,8 +300,64 @@ impl ShellModel {
     /// Breaks every triangle over its threshold at positions `x` (m), velocities `v` (m/s):
     /// splits (or budges), opens the cracks by splitting vertices, and rebuilds the rest state.
     /// `x` and `v` grow by the vertices added; the report says where each came from. Nothing
-    /// happens for a shell that does not break or when no triangle is over.
+    /// happens for a shell that does not break or when no triangle is over; on an error the
+    /// model, `x` and `v` are left as they were.
     pub fn fracture(
+        &mut self,
+        x: &mut Vec<Vec3>,
+        v: &mut Vec<Vec3>,
+    ) -> Result<FractureReport, ShellError> {
+        if self.fracture.is_none() || self.worst_fracture_ratio(x)? <= 1.0 {
+            return Ok(FractureReport::default());
+        }
+        let (mut xs, mut vs) = (x.clone(), v.clone());
+        let report = self.fracture_into(&mut xs, &mut vs)?;
+        *x = xs;
+        *v = vs;
+        Ok(report)
+    }
+
+    /// The largest of [`ShellModel::fracture_ratios`] at `x` (0 for a shell that does not
+    /// break), computed in parallel without allocating.
+    pub fn worst_fracture_ratio(&mut self, x: &[Vec3]) -> Result<f64, ShellError> {
+        self.check_positions(x.len())?;
+        let Some(fs) = &self.fracture else {
+            return Ok(0.0);
+        };
+        let params = fs.params;
+        self.edge_pass(x);
+        let h = self.material.thickness;
+        let fe = self.mesh.face_edges();
+        let plastic = self.plastic.as_ref();
+        let ew = &self.edge_work;
+        Ok(self
+            .faces
+            .par_iter()
+            .with_min_len(512)
+            .enumerate()
+            .map(|(f, r)| {
+                let e = fe[f];
+                let mut s = e.map(|k| ew[k as usize].s);
+                let mut d = e.map(|k| ew[k as usize].dphi);
+                if let Some(p) = plastic {
+                    for k in 0..3 {
+                        s[k] -= p.s[f][k];
+                        d[k] -= p.phi[f][k];
+                    }
+                }
+                let (em, ec) = (combine(&r.m, s), combine(&r.n, d));
+                let mut worst: f64 = 0.0;
+                for z in [0.5 * h, -0.5 * h] {
+                    let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
+                    let [(hi, _), (lo, _)] = principal(t);
+                    worst = worst.max(hi / params.tensile).max(-lo / params.compressive);
+                }
+                worst
+            })
+            .reduce(|| 0.0, f64::max))
+    }
+
+    fn fracture_into(
         &mut self,
         x: &mut Vec<Vec3>,
         v: &mut Vec<Vec3>,
@@ -413,7 +480,9 @@ impl ShellModel {
                 None
             };
             if let Some(c) = near {
-                let around: Vec<usize> = faces_around(mesh, c);
+                // Moving c changes every edge whose four-vertex stencil holds it: the
+                // triangles on both sides of those take the change.
+                let around: Vec<usize> = faces_of_stencil(mesh, c);
                 if around.iter().any(|&g| touched[g]) {
                     continue;
                 }
@@ -438,7 +507,9 @@ impl ShellModel {
                 // Budge: c moves onto the line (rest and current positions) when it is not on
                 // a boundary and no triangle around it would get an angle under MIN_ANGLE or
                 // turn over.
-                if !on_boundary[c as usize] && budge_keeps_quality(mesh, &around, c, rq) {
+                let with_c = faces_around(mesh, c);
+                let moved = !on_boundary[c as usize] && budge_keeps_quality(mesh, &with_c, c, rq);
+                if moved {
                     edit.rest[c as usize] = rq;
                     x[c as usize] = lerp(x[a as usize], x[b as usize], t);
                     absorb.extend(around.iter().copied());
@@ -460,7 +531,7 @@ impl ShellModel {
                 report.events.push(FractureEvent {
                     face: f,
                     ratio,
-                    budged: true,
+                    budged: moved,
                 });
                 continue;
             }
@@ -495,6 +566,7 @@ impl ShellModel {
         }
         open_cracks(&mut edit, x, v);
         report.added = edit.added.clone();
+        report.changed = true;
         let Edit {
             rest,
             tris,
@@ -601,6 +673,20 @@ fn faces_around(mesh: &ShellMesh, c: u32) -> Vec<usize> {
         .stencil(c as usize)
         .iter()
         .filter(|(_, role)| matches!(role, Role::Start | Role::End))
+        .flat_map(|&(k, _)| mesh.edges()[k as usize].faces)
+        .filter(|&g| g != NONE)
+        .map(|g| g as usize)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// The triangles beside every edge whose four-vertex stencil holds vertex `c`.
+fn faces_of_stencil(mesh: &ShellMesh, c: u32) -> Vec<usize> {
+    let mut out: Vec<usize> = mesh
+        .stencil(c as usize)
+        .iter()
         .flat_map(|&(k, _)| mesh.edges()[k as usize].faces)
         .filter(|&g| g != NONE)
         .map(|g| g as usize)

@@ -10,7 +10,8 @@
 //! `z`, `T_m + z T_c`, so its squared norm averaged over the thickness is
 //! `|T_m|^2 + h^2 / 12 |T_c|^2 = F^2`. The face yields where `F > eps_0`; the update moves
 //! both in-plane plastic parts down the gradient of `F^2` until `F = eps_0` (a return to the
-//! yield surface; one step reaches it to 1e-9 in the tests), once per step at the step's end
+//! yield surface; one step reaches it to round-off, 1e-14 in the tests), once per step at the
+//! step's end
 //! positions before the forces, as explicit finite elements return-map.
 
 use crate::error::ShellError;

@@ -1,7 +1,8 @@
 //! The paper's simulation loop (Gingold et al. 2004): each step of length `dt` is covered by
 //! sub-steps of `dt 2^-k`; a trial sub-step is discarded whole (positions, velocities, forces,
 //! plastic state) and retried at `k + 1` when the largest force grew by more than a factor or
-//! a triangle would break in it (past its threshold by more than `overshoot`). At
+//! a triangle would break in it (past its threshold by more than `overshoot`), or when it ran
+//! away (a non-finite energy). At
 //! `k = levels` a sub-step is always taken. After a sub-step is taken the plastic state is
 //! updated (inside its force pass), over-strained triangles break, and `k` falls by one; `k`
 //! carries over from step to step, so steps stay fine while forces keep jumping.
@@ -22,7 +23,8 @@ pub struct ShellSearch {
     /// (>= 0; 0, the paper's: every fracture is found at the finest level).
     pub overshoot: f64,
     /// Forces under this share of the largest seen so far cannot reject a trial for growing
-    /// (in [0, 1)): a shell starting at rest has no force to grow from.
+    /// (in [0, 1)); growth is also judged from no less than the model's force scale
+    /// ([`crate::ShellModel::force_scale`]).
     pub force_floor: f64,
 }
 
@@ -138,6 +140,7 @@ impl SearchedShell {
         let full = 1u64 << levels;
         let mut done = 0u64;
         let breaks = self.shell.model().fracture_params().is_some();
+        let scale = self.shell.model().force_scale();
         let mut before = self.shell.largest_force();
         while done < full {
             let units = (full >> self.k).min(full - done);
@@ -145,23 +148,23 @@ impl SearchedShell {
             if trial {
                 self.shell.save(&mut self.snapshot);
             }
-            self.shell.step(dt * units as f64 / full as f64)?;
+            let stepped = self.shell.step(dt * units as f64 / full as f64);
+            // A trial that ran away is discarded like one whose force grew; at the finest
+            // level the error stands.
+            let ran_away = matches!(stepped, Err(ShellError::RanAway { .. }));
+            if !(trial && ran_away) {
+                stepped?;
+            }
             let after = self.shell.largest_force();
-            // From no force at all (a shell at rest) any force is infinite growth: no trial
-            // is judged against nothing.
-            let grew = before > 0.0
-                && after > self.config.force_growth * before
-                && after > self.config.force_floor * self.peak;
-            let cracks = breaks && {
-                let x = self.shell.positions().to_vec();
-                let worst = self
-                    .shell
-                    .model_mut()
-                    .fracture_ratios(&x)?
-                    .iter()
-                    .fold(0.0f64, |m, r| m.max(r.0));
-                worst > 1.0 + self.config.overshoot
-            };
+            // Growth is judged from at least the force scale: round-off in free fall is not
+            // a force, and the first contact is judged against the scale, not against nothing.
+            let grew = ran_away
+                || (after > self.config.force_growth * before.max(scale)
+                    && after > self.config.force_floor * self.peak);
+            let cracks = trial
+                && !grew
+                && breaks
+                && self.shell.worst_fracture_ratio()? > 1.0 + self.config.overshoot;
             if trial && (grew || cracks) {
                 self.shell.restore(&self.snapshot);
                 self.k += 1;

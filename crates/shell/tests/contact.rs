@@ -69,3 +69,33 @@ fn a_vertex_inside_a_collider_at_the_start_is_refused() {
     let err = shell.set_colliders(c, 5e-4).unwrap_err();
     assert!(err.to_string().contains("ball 0"), "{err}");
 }
+
+#[test]
+fn fracture_adds_vertices_that_contact_follows() {
+    // A glass sheet over a ground, pulled apart at its ends until it breaks: the vertices
+    // fracture adds get contact radii too, and stepping on with the colliders works.
+    let s = sheet(0.1, 0.05, 20, 10).unwrap();
+    let v: Vec<_> = s.vertices.iter().map(|p| [p[0], p[1], 0.01]).collect();
+    let mesh = ShellMesh::new(v.clone(), s.triangles).unwrap();
+    let glass = ShellMaterial::new(70e9, 0.22, 2500.0, 1e-3).unwrap();
+    let model = ShellModel::new(mesh, glass)
+        .unwrap()
+        .with_fracture(ShellFracture::new(1e-3, 1e-3, 0.25, 1.0).unwrap());
+    let mut shell = ExplicitShell::new(model).unwrap();
+    for (i, p) in v.iter().enumerate() {
+        if p[0] < 1e-9 {
+            shell.drive(i, [-1.0, 0.0, 0.0]);
+        } else if p[0] > 0.1 - 1e-9 {
+            shell.drive(i, [1.0, 0.0, 0.0]);
+        }
+    }
+    let c = Colliders::new(vec![ground()], vec![], [0.0; 3]).unwrap();
+    shell.set_colliders(c, 5e-4).unwrap();
+    let n0 = shell.positions().len();
+    let dt = 0.25 * shell.stable_step().unwrap();
+    for _ in 0..2000 {
+        shell.step(dt).unwrap();
+        shell.fracture().unwrap();
+    }
+    assert!(shell.positions().len() > n0);
+}
