@@ -212,23 +212,10 @@ fn egg(subdivisions: u32, speed: f64) -> Result<ExplicitShell, ShellError> {
 
 /// Connected pieces of a shell's mesh.
 fn pieces(m: &ShellMesh) -> usize {
-    let nf = m.triangles().len();
-    let mut parent: Vec<usize> = (0..nf).collect();
-    fn root(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for e in m.edges() {
-        if !e.is_boundary() {
-            let a = root(&mut parent, e.faces[0] as usize);
-            let b = root(&mut parent, e.faces[1] as usize);
-            parent[a] = b;
-        }
-    }
-    (0..nf).filter(|&f| root(&mut parent, f) == f).count()
+    perifrac_shell::pieces(m)
+        .iter()
+        .max()
+        .map_or(0, |&p| p as usize + 1)
 }
 
 /// The paper's Figure 9: an egg shell dropped gently on the ground, stepped plainly at

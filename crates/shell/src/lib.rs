@@ -27,6 +27,7 @@ pub mod generate;
 pub mod material;
 pub mod mesh;
 pub mod model;
+pub mod output;
 pub mod plastic;
 pub mod search;
 
@@ -36,6 +37,7 @@ pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;
 pub use mesh::{Edge, Role, ShellMesh, NONE};
 pub use model::{dihedral, phi, FaceStrain, ShellModel};
+pub use output::{enclosed_volume, pieces, FrameMesh};
 pub use perifrac_physics::Vec3;
 pub use plastic::ShellYield;
 pub use search::{SearchStats, SearchedShell, ShellSearch};
