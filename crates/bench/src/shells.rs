@@ -179,6 +179,71 @@ pub fn plates(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, B
     Ok(t)
 }
 
+/// A sheet stretched uniformly in its plane against the closed form: 10 x 5 cm steel, 1 mm,
+/// `nu = 0.3`, stretched by 1% along x and contracted across by the plane-stress Poisson
+/// strain (Green strains `E_yy = -nu E_xx`), so the stress is uniaxial; the pull on the right
+/// edge is `Y h W E_xx lambda_x` (first Piola stress times the rest width) and the top and
+/// bottom edges carry nothing, so every vertex off the ends is in balance. The discrete model
+/// should give both to round-off at every resolution (its membrane strain is exact for an
+/// affine map).
+pub fn membrane(effort: Effort) -> Result<Table, BenchError> {
+    let mut t = Table::new(&[
+        "quads",
+        "pull on the right edge (N)",
+        "closed form (N)",
+        "error",
+        "largest force on any other vertex (N)",
+    ]);
+    let (w, hgt, h, nu): (f64, f64, f64, f64) = (0.1, 0.05, 1e-3, 0.3);
+    let steel = ShellMaterial::new(200e9, nu, 7800.0, h).map_err(shell_error("membrane"))?;
+    let exx: f64 = 0.01 + 0.5 * 0.01 * 0.01;
+    let (lx, ly) = ((1.0 + 2.0 * exx).sqrt(), (1.0 - 2.0 * nu * exx).sqrt());
+    let expected = steel.young * h * hgt * exx * lx;
+    let sizes: &[(usize, usize)] = match effort {
+        Effort::Tiny => &[(10, 5)],
+        Effort::Full => &[(10, 5), (20, 10), (40, 20)],
+    };
+    for &(nx, ny) in sizes {
+        let case = format!("membrane {nx} x {ny}");
+        let s = generate::sheet(w, hgt, nx, ny).map_err(|e| BenchError::Mesh {
+            case: case.clone(),
+            message: e.to_string(),
+        })?;
+        let mesh = ShellMesh::new(s.vertices.clone(), s.triangles).map_err(shell_error(&case))?;
+        let mut model = ShellModel::new(mesh, steel).map_err(shell_error(&case))?;
+        let x: Vec<_> = s
+            .vertices
+            .iter()
+            .map(|p| [lx * p[0], ly * p[1], 0.0])
+            .collect();
+        let mut f = vec![[0.0; 3]; x.len()];
+        model.forces(&x, &mut f).map_err(shell_error(&case))?;
+        // The internal forces on the right column are minus the pull that holds it.
+        let pull: f64 = s
+            .vertices
+            .iter()
+            .zip(&f)
+            .filter(|(p, _)| p[0] > w - 1e-9)
+            .map(|(_, f)| -f[0])
+            .sum();
+        let across = s
+            .vertices
+            .iter()
+            .zip(&f)
+            .filter(|(p, _)| p[0] > 1e-9 && p[0] < w - 1e-9)
+            .map(|(_, f)| f[0].abs().max(f[1].abs()))
+            .fold(0.0, f64::max);
+        t.push(vec![
+            format!("{nx} x {ny}"),
+            format!("{pull:.6e}"),
+            format!("{expected:.6e}"),
+            format!("{:.1e}", (pull - expected).abs() / expected),
+            format!("{across:.1e}"),
+        ]);
+    }
+    Ok(t)
+}
+
 /// The egg of [`egg_drop`]: an ellipsoidal shell (22 x 22 x 29 mm half-axes, 0.35 mm, 30 GPa,
 /// breaking at a principal strain of 2e-3) just above the ground, falling at `speed`.
 fn egg(subdivisions: u32, speed: f64) -> Result<ExplicitShell, ShellError> {

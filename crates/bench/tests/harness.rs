@@ -333,6 +333,12 @@ fn shell_tables_hold_finite_deflections_and_every_egg_run() {
         let k: f64 = r[5].parse().unwrap();
         assert!(w > 0.5 * k && w < 1.5 * k, "{r:?}");
     }
+    // A uniform stretch: the pull is the closed form to round-off (measured 3e-14).
+    let membrane = perifrac_bench::shells::membrane(Effort::Tiny).unwrap();
+    for r in &membrane.rows {
+        let err: f64 = r[3].parse().unwrap();
+        assert!(err < 1e-10, "{r:?}");
+    }
     let (egg, text) = perifrac_bench::shells::egg_drop(Effort::Tiny, &mut quiet).unwrap();
     assert_eq!(egg.rows.len(), 2);
     assert!(text.contains("triangles"));

@@ -197,11 +197,14 @@ fn shells_report(c: &Common) -> Result<()> {
     let mut progress = report.progress();
     let e = effort(c);
     let plates = perifrac_bench::shells::plates(e, &mut progress)?;
+    let membrane = perifrac_bench::shells::membrane(e)?;
     let (egg, text) = perifrac_bench::shells::egg_drop(e, &mut progress)?;
     let speed = perifrac_bench::shells::speed(e, &mut progress)?;
     let mut md = report.header("shells");
     md.push_str("## Plates under their own weight against Kirchhoff\n\n");
     md.push_str(&plates.to_markdown());
+    md.push_str("\n## A sheet stretched in its plane against the closed form\n\n");
+    md.push_str(&membrane.to_markdown());
     md.push_str("\n## The event search on a dropped egg shell (the paper's Figure 9)\n\n");
     md.push_str(&format!("{text}\n\n"));
     md.push_str(&egg.to_markdown());
