@@ -7,6 +7,7 @@ use perifrac_contact::{Colliders, ContactStats};
 use crate::error::ShellError;
 use crate::fracture::FractureReport;
 use crate::model::ShellModel;
+use crate::self_contact::{SelfContact, SelfContactStats, ShellSelfContact};
 use perifrac_physics::lanczos_frequency_of;
 use perifrac_physics::math::{axpy, dot, norm, scale, sub, Vec3};
 use perifrac_physics::stable_step::{LANCZOS_ITERATIONS, LANCZOS_TOLERANCE};
@@ -20,12 +21,14 @@ pub(crate) struct Snapshot {
     ps: Vec<[f64; 3]>,
     pphi: Vec<[f64; 3]>,
     elastic: f64,
+    self_energy: f64,
     time: f64,
     /// The colliders' moving state (balls).
     colliders: Writer,
 }
 
-/// A shell moving under its elastic forces, gravity and pinned vertices, stepped explicitly.
+/// A shell moving under its elastic forces, gravity, pinned vertices, colliders and (when set)
+/// its own pieces' repulsion, stepped explicitly.
 #[derive(Debug, Clone)]
 pub struct ExplicitShell {
     model: ShellModel,
@@ -41,6 +44,10 @@ pub struct ExplicitShell {
     colliders: Option<Colliders>,
     radii: Vec<f64>,
     contact: ContactStats,
+    /// Repulsion between the shell's own pieces, when set.
+    self_contact: Option<SelfContact>,
+    /// Its penalty energy at the current positions (J).
+    self_energy: f64,
 }
 
 impl ExplicitShell {
@@ -63,6 +70,8 @@ impl ExplicitShell {
             colliders: None,
             radii: Vec::new(),
             contact: ContactStats::default(),
+            self_contact: None,
+            self_energy: 0.0,
         })
     }
 
@@ -83,6 +92,7 @@ impl ExplicitShell {
         s.f.clone_from(&self.f);
         self.model.save_plastic(&mut s.ps, &mut s.pphi);
         s.elastic = self.elastic;
+        s.self_energy = self.self_energy;
         s.time = self.time;
         s.colliders.clear();
         if let Some(c) = &self.colliders {
@@ -97,6 +107,7 @@ impl ExplicitShell {
         self.f.clone_from(&s.f);
         self.model.restore_plastic(&s.ps, &s.pphi);
         self.elastic = s.elastic;
+        self.self_energy = s.self_energy;
         self.time = s.time;
         if let Some(c) = &mut self.colliders {
             // Saved from these very colliders a moment ago: it reads back.
@@ -136,7 +147,8 @@ impl ExplicitShell {
         &mut self.v
     }
 
-    /// Moves the vertices to `x` (m) and evaluates the forces there.
+    /// Moves the vertices to `x` (m) and evaluates the forces there (elastic and self-contact;
+    /// the colliders' come with the next step).
     pub fn set_positions(&mut self, x: &[Vec3]) -> Result<(), ShellError> {
         if x.len() != self.x.len() {
             return Err(ShellError::LengthMismatch {
@@ -146,8 +158,52 @@ impl ExplicitShell {
             });
         }
         self.x.copy_from_slice(x);
+        self.internal_forces()
+    }
+
+    /// The elastic forces and self-contact's at the current positions, into `f`.
+    fn internal_forces(&mut self) -> Result<(), ShellError> {
         self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        self.add_self_contact()
+    }
+
+    /// Adds self-contact's forces at the current positions into `f`.
+    fn add_self_contact(&mut self) -> Result<(), ShellError> {
+        self.self_energy = match &mut self.self_contact {
+            Some(sc) => sc.add_forces(self.model.mesh(), &self.x, &mut self.f)?,
+            None => 0.0,
+        };
         Ok(())
+    }
+
+    /// Turns repulsion between the shell's own pieces on with `params` (or off with `None`)
+    /// and evaluates the forces at the current positions, as
+    /// [`ExplicitShell::set_positions`] does (the colliders' come back with the next step).
+    /// Off by default: a shell without it spends nothing on it.
+    pub fn set_self_contact(&mut self, params: Option<ShellSelfContact>) -> Result<(), ShellError> {
+        self.self_contact = match params {
+            Some(p) => Some(SelfContact::new(p, self.model.material())?),
+            None => None,
+        };
+        self.internal_forces()
+    }
+
+    /// Self-contact, when set.
+    pub fn self_contact(&self) -> Option<&SelfContact> {
+        self.self_contact.as_ref()
+    }
+
+    /// What self-contact found and cost in its last evaluation and in all (zeros when off).
+    pub fn self_contact_stats(&self) -> SelfContactStats {
+        self.self_contact
+            .as_ref()
+            .map(SelfContact::stats)
+            .unwrap_or_default()
+    }
+
+    /// Self-contact's penalty energy (J) at the current positions (0 when off).
+    pub fn self_contact_energy(&self) -> f64 {
+        self.self_energy
     }
 
     /// Gravity (m/s^2) on every vertex.
@@ -247,7 +303,8 @@ impl ExplicitShell {
             .sum()
     }
 
-    /// One step of `dt` (s): half kick, drift, forces, half kick.
+    /// One step of `dt` (s): half kick, drift, forces (elastic, colliders, self-contact), half
+    /// kick.
     pub fn step(&mut self, dt: f64) -> Result<(), ShellError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(ShellError::BadSetting {
@@ -271,9 +328,10 @@ impl ExplicitShell {
                 &mut self.f,
             );
         }
+        self.add_self_contact()?;
         self.kick(0.5 * dt);
         self.time += dt;
-        if !self.elastic.is_finite() {
+        if !(self.elastic.is_finite() && self.self_energy.is_finite()) {
             return Err(ShellError::RanAway { time: self.time });
         }
         Ok(())
@@ -297,7 +355,7 @@ impl ExplicitShell {
 
     /// Breaks every triangle over its threshold now (see [`ShellModel::fracture`]): vertices
     /// added take their sources' pins (a point on an edge is pinned when both ends are), and
-    /// the forces are evaluated on the new mesh.
+    /// the forces (elastic and self-contact) are evaluated on the new mesh.
     pub fn fracture(&mut self) -> Result<FractureReport, ShellError> {
         let report = self.model.fracture(&mut self.x, &mut self.v)?;
         if !report.changed {
@@ -311,7 +369,10 @@ impl ExplicitShell {
             }
         }
         self.f.resize(self.x.len(), [0.0; 3]);
-        self.elastic = self.model.forces(&self.x, &mut self.f)?;
+        if let Some(sc) = &mut self.self_contact {
+            sc.invalidate();
+        }
+        self.internal_forces()?;
         Ok(report)
     }
 

@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+mod broad_phase;
 pub mod dynamics;
 pub mod error;
 pub mod fracture;
@@ -29,7 +30,9 @@ pub mod mesh;
 pub mod model;
 pub mod output;
 pub mod plastic;
+pub mod proximity;
 pub mod search;
+pub mod self_contact;
 
 pub use dynamics::{max_frequency, ExplicitShell};
 pub use error::ShellError;
@@ -41,3 +44,4 @@ pub use output::{enclosed_volume, pieces, FrameMesh};
 pub use perifrac_physics::Vec3;
 pub use plastic::ShellYield;
 pub use search::{SearchStats, SearchedShell, ShellSearch};
+pub use self_contact::{SelfContact, SelfContactStats, ShellSelfContact};

@@ -1,0 +1,426 @@
+//! Contact between a shell's own pieces (Gingold et al. 2004, "fracture-aware collision
+//! detection and response"): every vertex-triangle and edge-edge pair closer than the band
+//! repels with the penalty energy `k (band - d)^2 / 2`, `d` the distance between the pair's
+//! closest points, and its forces are that energy's exact negative gradient.
+//!
+//! Pairs that are neighbours in the mesh (a vertex of one is, or shares an edge with, a vertex
+//! of the other) never repel, and neither do pairs closer than the inset in the rest (material)
+//! configuration: the two sides of a fresh crack start coincident and stay apart from each
+//! other's field, which is the paper's inset of the field along fracture boundaries (see
+//! `docs/DECISIONS.md`, "Self-contact"). Candidates come from a uniform grid and are kept
+//! until a vertex moves half the skin beyond the mean move (`broad_phase.rs`); each step the pairs are evaluated in
+//! parallel, one slot each, and added to the forces in the list's order, so the result is the
+//! same for any thread count.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use perifrac_physics::math::{add, cross, norm, norm_squared, scale, sub, Vec3};
+
+use crate::broad_phase::{Candidates, Reach};
+use crate::error::ShellError;
+use crate::material::ShellMaterial;
+use crate::mesh::ShellMesh;
+use crate::proximity::{combine3, lerp, point_triangle_weights, segment_segment_params};
+
+/// Pairs per task in the force pass.
+const MIN_PER_TASK: usize = 512;
+
+/// Closest points nearer than this share of the band give no direction of their own: the
+/// triangle's normal (or the edges' common normal) is used.
+const COINCIDENT: f64 = 1e-12;
+
+/// Edge-edge pairs whose `|u x v|^2` is under this share of `|u|^2 |v|^2` at rest (edges
+/// within about 1.8 degrees of parallel) are faded out by the mollifier (see
+/// [`edge_edge`]).
+const PARALLEL: f64 = 0.1;
+
+/// Self-contact settings, relative to the shell's thickness `h` and Young's modulus `Y`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellSelfContact {
+    /// Pairs closer than `band h` (m) repel (> 0; default 0.5: the paper's field of `h/2`
+    /// around the mid-surface on each side, the slab the shell fills).
+    pub band: f64,
+    /// Pairs closer than `inset h` (m) in the rest configuration never repel (>= `band`;
+    /// default 1.0): the inset of the field along cracks, and no force in the rest state.
+    pub inset: f64,
+    /// Penalty stiffness per pair in units of `Y h` (N/m per N/m, > 0; default 0.01, which
+    /// keeps the elastic stable step stable: see `docs/DECISIONS.md`).
+    pub stiffness: f64,
+    /// The candidate list reaches `skin h` (m) beyond the band and is rebuilt when a vertex
+    /// has moved half of that, the vertices' mean move taken out (> 0; default 0.5).
+    pub skin: f64,
+}
+
+impl Default for ShellSelfContact {
+    fn default() -> Self {
+        ShellSelfContact {
+            band: 0.5,
+            inset: 1.0,
+            stiffness: 0.01,
+            skin: 0.5,
+        }
+    }
+}
+
+impl ShellSelfContact {
+    /// Refuses settings out of range: each finite and > 0, `inset >= band`.
+    pub fn check(&self) -> Result<(), ShellError> {
+        for (what, value) in [
+            ("shell self-contact band (share of h)", self.band),
+            (
+                "shell self-contact stiffness (share of Y h)",
+                self.stiffness,
+            ),
+            ("shell self-contact skin (share of h)", self.skin),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ShellError::BadSetting {
+                    what,
+                    expected: "finite and > 0",
+                    value,
+                });
+            }
+        }
+        if !(self.inset.is_finite() && self.inset >= self.band) {
+            return Err(ShellError::BadSetting {
+                what: "shell self-contact inset (share of h)",
+                expected: "finite and >= the band",
+                value: self.inset,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// What self-contact found and cost in its last evaluation, and since it was set.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SelfContactStats {
+    /// Pairs in the candidate list.
+    pub candidates: usize,
+    /// Vertex-triangle pairs within the band.
+    pub vertex_face: usize,
+    /// Edge-edge pairs within the band.
+    pub edge_edge: usize,
+    /// The largest `band - d` over the pairs (m; 0 when none).
+    pub deepest: f64,
+    /// Penalty energy (J).
+    pub energy: f64,
+    /// Whether this evaluation rebuilt the candidate list.
+    pub rebuilt: bool,
+    /// Evaluations since self-contact was set.
+    pub evaluations: u64,
+    /// Candidate-list builds since self-contact was set.
+    pub builds: u64,
+    /// Wall time of this evaluation (s), list build included.
+    pub seconds: f64,
+    /// Wall time of every evaluation since self-contact was set (s), discarded search trials
+    /// included.
+    pub total_seconds: f64,
+}
+
+/// One pair's forces `f[i]` (N) on vertex `idx[i]`, its energy (J) and `pen = band - d` (m;
+/// <= 0: out of the band, nothing).
+#[derive(Debug, Clone, Copy, Default)]
+struct Slot {
+    idx: [u32; 4],
+    f: [Vec3; 4],
+    energy: f64,
+    pen: f64,
+}
+
+/// Self-contact of one shell: its settings in metres and newtons, the candidate list and the
+/// per-pair buffers (reused: no allocation per step once they fit).
+#[derive(Debug, Clone)]
+pub struct SelfContact {
+    params: ShellSelfContact,
+    band: f64,
+    k: f64,
+    candidates: Candidates,
+    slots: Vec<Slot>,
+    stats: SelfContactStats,
+}
+
+impl SelfContact {
+    /// Self-contact for a shell of `material`, with `params` checked.
+    pub fn new(
+        params: ShellSelfContact,
+        material: &ShellMaterial,
+    ) -> Result<SelfContact, ShellError> {
+        params.check()?;
+        let h = material.thickness;
+        let band = params.band * h;
+        Ok(SelfContact {
+            params,
+            band,
+            k: params.stiffness * material.young * h,
+            candidates: Candidates::new(Reach {
+                band,
+                inset: params.inset * h,
+                skin: params.skin * h,
+            }),
+            slots: Vec::new(),
+            stats: SelfContactStats::default(),
+        })
+    }
+
+    /// The settings.
+    pub fn params(&self) -> ShellSelfContact {
+        self.params
+    }
+
+    /// The band (m).
+    pub fn band(&self) -> f64 {
+        self.band
+    }
+
+    /// The penalty stiffness per pair (N/m).
+    pub fn stiffness(&self) -> f64 {
+        self.k
+    }
+
+    /// What the last evaluation found and cost.
+    pub fn stats(&self) -> SelfContactStats {
+        self.stats
+    }
+
+    /// Marks the mesh as changed (after fracture, say): the next evaluation rebuilds the
+    /// adjacency and the candidate list. A changed vertex count is noticed without it.
+    pub fn invalidate(&mut self) {
+        self.candidates.invalidate();
+    }
+
+    /// Adds the penalty forces (N) at positions `x` (m) of `mesh`'s vertices into `forces`;
+    /// returns the penalty energy (J).
+    pub fn add_forces(
+        &mut self,
+        mesh: &ShellMesh,
+        x: &[Vec3],
+        forces: &mut [Vec3],
+    ) -> Result<f64, ShellError> {
+        let n = mesh.num_vertices();
+        for (what, got) in [
+            ("self-contact positions", x.len()),
+            ("self-contact forces", forces.len()),
+        ] {
+            if got != n {
+                return Err(ShellError::LengthMismatch {
+                    what,
+                    expected: n,
+                    got,
+                });
+            }
+        }
+        let start = Instant::now();
+        let rebuilt = self.candidates.update(mesh, x);
+        let (nvf, nee) = (self.candidates.vf.len(), self.candidates.ee.len());
+        self.slots.resize(nvf + nee, Slot::default());
+        let (band, k) = (self.band, self.k);
+        let (vf, ee) = (&self.candidates.vf, &self.candidates.ee);
+        let (tris, edges, rest) = (mesh.triangles(), mesh.edges(), mesh.vertices());
+        self.slots
+            .par_iter_mut()
+            .with_min_len(MIN_PER_TASK)
+            .enumerate()
+            .for_each(|(i, slot)| {
+                *slot = if i < nvf {
+                    let [v, t] = vf[i];
+                    vertex_face(x, v, tris[t as usize], band, k)
+                } else {
+                    let [e, g] = ee[i - nvf];
+                    let (e, g) = (edges[e as usize].v, edges[g as usize].v);
+                    edge_edge(x, e, g, parallel_scale(rest, e, g), band, k)
+                };
+            });
+        let mut energy = 0.0;
+        let (mut count_vf, mut count_ee, mut deepest) = (0, 0, 0.0f64);
+        for (i, s) in self.slots.iter().enumerate() {
+            if s.pen <= 0.0 {
+                continue;
+            }
+            for (&j, &fj) in s.idx.iter().zip(&s.f) {
+                let f = &mut forces[j as usize];
+                *f = add(*f, fj);
+            }
+            energy += s.energy;
+            deepest = deepest.max(s.pen);
+            if i < nvf {
+                count_vf += 1;
+            } else {
+                count_ee += 1;
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let st = &mut self.stats;
+        *st = SelfContactStats {
+            candidates: nvf + nee,
+            vertex_face: count_vf,
+            edge_edge: count_ee,
+            deepest,
+            energy,
+            rebuilt,
+            evaluations: st.evaluations + 1,
+            builds: self.candidates.builds,
+            seconds,
+            total_seconds: st.total_seconds + seconds,
+        };
+        Ok(energy)
+    }
+
+    /// The penalty energy (J) at positions `x` (m) (allocates a force buffer: for checks, not
+    /// for stepping).
+    pub fn energy(&mut self, mesh: &ShellMesh, x: &[Vec3]) -> Result<f64, ShellError> {
+        let mut f = vec![[0.0; 3]; x.len()];
+        self.add_forces(mesh, x, &mut f)
+    }
+}
+
+/// The slot of a pair whose closest points are `p - q = gap` with weights `w` on `idx`;
+/// `fallback` gives the direction when the points coincide.
+fn slot(idx: [u32; 4], w: [f64; 4], gap: Vec3, band: f64, k: f64, fallback: Vec3) -> Slot {
+    let d = norm(gap);
+    if d >= band {
+        return Slot::default();
+    }
+    let dir = if d > COINCIDENT * band {
+        scale(gap, 1.0 / d)
+    } else {
+        let m = norm(fallback);
+        if m > 0.0 {
+            scale(fallback, 1.0 / m)
+        } else {
+            [0.0; 3]
+        }
+    };
+    let pen = band - d;
+    let g = scale(dir, k * pen);
+    Slot {
+        idx,
+        f: w.map(|wi| scale(g, wi)),
+        energy: 0.5 * k * pen * pen,
+        pen,
+    }
+}
+
+/// Vertex `v` against triangle `t`: `d` from `x_v` to the closest point `q = sum w_i x_i`.
+fn vertex_face(x: &[Vec3], v: u32, t: [u32; 3], band: f64, k: f64) -> Slot {
+    let p = x[v as usize];
+    let [a, b, c] = t.map(|i| x[i as usize]);
+    let w = point_triangle_weights(p, a, b, c);
+    let gap = sub(p, combine3(w, a, b, c));
+    let normal = cross(sub(b, a), sub(c, a));
+    slot(
+        [v, t[0], t[1], t[2]],
+        [1.0, -w[0], -w[1], -w[2]],
+        gap,
+        band,
+        k,
+        normal,
+    )
+}
+
+/// The mollifier's scale for edges `e` and `g` (m^4): [`PARALLEL`] times the product of
+/// their squared rest lengths.
+fn parallel_scale(rest: &[Vec3], e: [u32; 2], g: [u32; 2]) -> f64 {
+    let le = norm_squared(sub(rest[e[1] as usize], rest[e[0] as usize]));
+    let lg = norm_squared(sub(rest[g[1] as usize], rest[g[0] as usize]));
+    PARALLEL * le * lg
+}
+
+/// Edge `e` against edge `g`: `d` between their closest points, the energy times the
+/// mollifier `m(c)`, `c = |u x v|^2` (`u`, `v` the edges), `m = (c / s)(2 - c / s)` below
+/// `s = scale`, 1 above: it goes smoothly to 0 as the edges turn parallel, where their closest
+/// points jump (the vertex-triangle pairs of their ends hold parallel edges apart).
+fn edge_edge(x: &[Vec3], e: [u32; 2], g: [u32; 2], scale_c: f64, band: f64, k: f64) -> Slot {
+    let [p0, p1] = e.map(|i| x[i as usize]);
+    let [q0, q1] = g.map(|i| x[i as usize]);
+    let (s, t) = segment_segment_params(p0, p1, q0, q1);
+    let gap = sub(lerp(p0, p1, s), lerp(q0, q1, t));
+    let (u, v) = (sub(p1, p0), sub(q1, q0));
+    let normal = cross(u, v);
+    let mut out = slot(
+        [e[0], e[1], g[0], g[1]],
+        [1.0 - s, s, t - 1.0, -t],
+        gap,
+        band,
+        k,
+        normal,
+    );
+    let c = norm_squared(normal);
+    if out.pen <= 0.0 || c >= scale_c {
+        return out;
+    }
+    let r = c / scale_c;
+    let m = r * (2.0 - r);
+    let dm = 2.0 * (1.0 - r) / scale_c;
+    // Gradients of c: 2 v x (u x v) by u, 2 (u x v) x u by v.
+    let gu = scale(cross(v, normal), 2.0 * dm * out.energy);
+    let gv = scale(cross(normal, u), 2.0 * dm * out.energy);
+    let grad = [scale(gu, -1.0), gu, scale(gv, -1.0), gv];
+    for (f, gm) in out.f.iter_mut().zip(grad) {
+        *f = sub(scale(*f, m), gm);
+    }
+    out.energy *= m;
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::{ExplicitShell, Snapshot};
+    use crate::generate::sheet;
+    use crate::model::ShellModel;
+
+    /// Two 2 x 2 cm steel sheets, 1 cm apart at rest, placed 0.49 mm apart (just inside the
+    /// band) and closing at 1 m/s.
+    fn pressed() -> ExplicitShell {
+        let s = sheet(0.02, 0.02, 6, 6).unwrap();
+        let nv = s.vertices.len();
+        let mut v = s.vertices.clone();
+        v.extend(s.vertices.iter().map(|p| [p[0] + 1e-3, p[1] + 7e-4, 0.01]));
+        let mut t = s.triangles.clone();
+        t.extend(s.triangles.iter().map(|t| t.map(|i| i + nv as u32)));
+        let mesh = ShellMesh::new(v, t).unwrap();
+        let steel = ShellMaterial::new(200e9, 0.3, 7800.0, 1e-3).unwrap();
+        let mut shell = ExplicitShell::new(ShellModel::new(mesh, steel).unwrap()).unwrap();
+        shell
+            .set_self_contact(Some(ShellSelfContact::default()))
+            .unwrap();
+        let mut x = shell.positions().to_vec();
+        for p in &mut x[nv..] {
+            p[2] = 4.9e-4;
+        }
+        shell.set_positions(&x).unwrap();
+        for (i, v) in shell.velocities_mut().iter_mut().enumerate() {
+            v[2] = if i < nv { 0.5 } else { -0.5 };
+        }
+        shell
+    }
+
+    #[test]
+    fn a_restored_trial_steps_as_if_it_had_not_been_taken() {
+        // The search's discarded trial: save, a long step (whose list build moves on), restore,
+        // then the same step as a shell that never tried: the same bits, penalty energy too.
+        let mut a = pressed();
+        let mut b = a.clone();
+        let dt = 0.5 * a.stable_step().unwrap();
+        let mut snap = Snapshot::default();
+        let mut touching = 0;
+        for _ in 0..50 {
+            a.save(&mut snap);
+            a.step(40.0 * dt).unwrap();
+            a.restore(&snap);
+            a.step(dt).unwrap();
+            b.step(dt).unwrap();
+            touching += (a.self_contact_stats().vertex_face > 0) as usize;
+        }
+        assert!(touching > 10, "{touching}");
+        assert_eq!(a.positions(), b.positions());
+        assert_eq!(a.velocities(), b.velocities());
+        assert_eq!(
+            a.self_contact_energy().to_bits(),
+            b.self_contact_energy().to_bits()
+        );
+    }
+}
