@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use perifrac_scene::{
-    check_output_dir, Checkpoint, Limits, Observer, Progress, Scene, SceneError, Setup,
+    check_output_dir, Checkpoint, Limits, Observer, Progress, Scene, SceneError, Setup, ShellScene,
+    ShellSetup,
 };
 
 /// Arguments of `perifrac run`.
@@ -114,6 +115,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 anyhow::bail!("give a scene and -o DIR, or --resume DIR");
             };
             check_output_dir(dir, args.force)?;
+            let text = std::fs::read_to_string(scene)
+                .with_context(|| format!("cannot read {}", scene.display()))?;
+            if perifrac_scene::is_shell_scene(&text) {
+                return run_shell(scene, &text, dir, args, threads);
+            }
             (dir.as_path(), Scene::load(scene)?, args.frames, None)
         }
     };
@@ -253,6 +259,85 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some((usd, took)) = &summary.usd {
         eprintln!("{}", crate::export::describe(usd, *took));
     }
+    Ok(())
+}
+
+/// Runs a thin-shell scene (`[shell]`): setup line, progress bar, summary.
+fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usize) -> Result<()> {
+    let started = Instant::now();
+    let parsed = ShellScene::parse(text, scene)?;
+    let setup = ShellSetup::new(&parsed, args.frames, args.allow_large).map_err(|e| match e {
+        SceneError::TooLarge { .. } => {
+            anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
+        }
+        other => other.into(),
+    })?;
+    let info = &setup.info;
+    eprintln!(
+        "{}: thin shell, {} vertices, {} triangles ({} free edges), thickness {:.3e} m, \
+         mass {:.4e} kg, dt {:.3e} s (stable limit {:.3e} s), {}, {} frames of {} steps on \
+         {threads} thread(s), setup {:.2} s",
+        scene.display(),
+        info.vertices,
+        info.triangles,
+        info.boundary_edges,
+        info.thickness,
+        info.mass,
+        info.dt,
+        info.dt_limit,
+        if info.event_levels > 0 {
+            format!("event search to level {}", info.event_levels)
+        } else {
+            "no event search".to_string()
+        },
+        setup.frames,
+        setup.steps_per_frame,
+        started.elapsed().as_secs_f64(),
+    );
+    let info_levels = info.event_levels;
+    let interactive = std::io::stderr().is_terminal() && !args.quiet;
+    let mut bar = Bar::new(interactive, interrupt_flag()?);
+    let t0 = Instant::now();
+    let result = perifrac_scene::run_shell(setup, dir, &mut bar);
+    bar.finish();
+    let wall = t0.elapsed().as_secs_f64();
+    let s = result.map_err(|e| stopped(e, scene, dir))?;
+    eprintln!(
+        "done in {wall:.2} s: {} steps ({:.0} steps/s), t = {:.4e} s, {} triangles broken, {} \
+         pieces, {} triangles yielded",
+        s.steps,
+        s.steps as f64 / wall.max(1e-9),
+        s.time,
+        s.broken_triangles,
+        s.fragments,
+        s.yielded
+    );
+    eprintln!(
+        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J",
+        s.kinetic_energy, s.elastic_energy
+    );
+    if info_levels > 0 {
+        eprintln!(
+            "event search: {} sub-steps ({:.2} per step), {} trial sub-steps undone",
+            s.substeps,
+            s.substeps as f64 / s.steps.max(1) as f64,
+            s.rejected
+        );
+    } else if s.substeps != s.steps {
+        eprintln!(
+            "{} sub-steps ({:.2} per step): steps were cut where fracture lowered the stable \
+             step",
+            s.substeps,
+            s.substeps as f64 / s.steps.max(1) as f64,
+        );
+    }
+    eprintln!(
+        "{} frames in {} (stepping {:.2} s, output {:.2} s)",
+        s.frames_written,
+        dir.join("frames").display(),
+        s.physics_time.as_secs_f64(),
+        s.output_time.as_secs_f64()
+    );
     Ok(())
 }
 

@@ -99,6 +99,19 @@ pub enum SceneError {
         /// The checkpoint written.
         checkpoint: PathBuf,
     },
+    /// A shell run stopped (an instability, or an interruption: shell runs keep no
+    /// checkpoint); the frames written so far are kept.
+    #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
+    ShellStopped {
+        /// Simulated time (s).
+        time: f64,
+        /// Steps completed.
+        step: u64,
+        /// Frames written and kept.
+        frames: usize,
+        /// What stopped it.
+        cause: String,
+    },
     /// The run stopped (an instability); the frames written so far are kept.
     #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
     Stopped {

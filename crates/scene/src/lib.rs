@@ -31,6 +31,7 @@ pub mod output;
 pub mod run;
 pub mod schema;
 pub mod setup;
+pub mod shell;
 pub mod usd;
 
 pub use budget::{Limits, WorkEstimate};
@@ -45,4 +46,7 @@ pub use output::{
 };
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
 pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo, SetupTimes};
+pub use shell::{
+    is_shell_scene, run_shell, ShellManifest, ShellScene, ShellSetup, ShellSetupInfo, ShellSummary,
+};
 pub use usd::{export_usd, UsdLayout, UsdReport, DEFAULT_FPS};

@@ -28,7 +28,29 @@ impl Scene {
 
     /// Parses `text` as if read from `path`.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| {
+        if crate::shell::is_shell_scene(text) {
+            return Err(SceneError::invalid(
+                path,
+                "shell",
+                "a thin-shell scene: `perifrac run` runs it; this command takes tet scenes \
+                 ([mesh])",
+            ));
+        }
+        let file: SceneFile = Scene::parse_as(text, path)?;
+        Ok(Scene {
+            path: path.to_path_buf(),
+            text: text.to_string(),
+            file,
+        })
+    }
+
+    /// Parses `text` (read from `path`) into the tables `T`, with line and column in every
+    /// syntax or schema error.
+    pub(crate) fn parse_as<T: serde::de::DeserializeOwned>(
+        text: &str,
+        path: &Path,
+    ) -> Result<T, SceneError> {
+        toml::from_str(text).map_err(|e| {
             let (line, column) = e
                 .span()
                 .map(|s| line_column(text, s.start))
@@ -39,11 +61,6 @@ impl Scene {
                 column,
                 message: e.message().trim().to_string(),
             }
-        })?;
-        Ok(Scene {
-            path: path.to_path_buf(),
-            text: text.to_string(),
-            file,
         })
     }
 

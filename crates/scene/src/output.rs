@@ -548,7 +548,7 @@ impl FrameWriter {
 }
 
 /// Removes an earlier run's files from `dir` (and nothing else), creating `dir` if needed.
-fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
+pub(crate) fn clear_output_dir(dir: &Path) -> Result<(), SceneError> {
     let err = |message: String| SceneError::Output {
         dir: dir.to_path_buf(),
         message,

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use crate::error::SceneError;
-use crate::schema::{Region, SceneFile};
+use crate::schema::{BallSpec, GroundSpec, Region, SceneFile, VelocitySpec};
 
 use super::defaults;
 use perifrac_physics::math::norm;
@@ -26,23 +26,23 @@ pub(crate) fn show(v: f64) -> String {
 }
 
 /// The scene file a message names.
-pub(super) struct Ctx<'a> {
+pub(crate) struct Ctx<'a> {
     /// The scene file.
-    pub(super) file: &'a Path,
+    pub(crate) file: &'a Path,
 }
 
 impl Ctx<'_> {
     /// The physics crate refused something; the message names the scene file.
-    pub(super) fn physics(&self, cause: perifrac_physics::PhysicsError) -> SceneError {
+    pub(crate) fn physics(&self, cause: perifrac_physics::PhysicsError) -> SceneError {
         SceneError::Physics {
             file: self.file.to_path_buf(),
             cause,
         }
     }
-    pub(super) fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
+    pub(crate) fn err(&self, key: impl Into<String>, message: impl Into<String>) -> SceneError {
         SceneError::invalid(self.file, key, message)
     }
-    pub(super) fn positive(&self, key: &str, v: f64, unit: &str) -> Result<f64, SceneError> {
+    pub(crate) fn positive(&self, key: &str, v: f64, unit: &str) -> Result<f64, SceneError> {
         if v.is_finite() && v > 0.0 {
             Ok(v)
         } else {
@@ -57,7 +57,7 @@ impl Ctx<'_> {
         }
     }
     /// A density (kg/m^3) at `key`: positive, finite and at most [`MAX_DENSITY`].
-    pub(super) fn density(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(crate) fn density(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         let v = self.positive(key, v, "kg/m^3")?;
         if v > MAX_DENSITY {
             return Err(self.err(
@@ -72,21 +72,21 @@ impl Ctx<'_> {
         }
         Ok(v)
     }
-    pub(super) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(crate) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         if v.is_finite() && v >= 0.0 {
             Ok(v)
         } else {
             Err(self.err(key, format!("{} must be finite and >= 0", show(v))))
         }
     }
-    pub(super) fn finite3(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+    pub(crate) fn finite3(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
         if v.iter().all(|c| c.is_finite()) {
             Ok(v)
         } else {
             Err(self.err(key, format!("{v:?} must be finite")))
         }
     }
-    pub(super) fn direction(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
+    pub(crate) fn direction(&self, key: &str, v: [f64; 3]) -> Result<[f64; 3], SceneError> {
         let v = self.finite3(key, v)?;
         let n = norm(v);
         if n < 1e-12 {
@@ -94,7 +94,7 @@ impl Ctx<'_> {
         }
         Ok(v.map(|c| c / n))
     }
-    pub(super) fn region(&self, key: &str, r: &Region) -> Result<(), SceneError> {
+    pub(crate) fn region(&self, key: &str, r: &Region) -> Result<(), SceneError> {
         self.finite3(&format!("{key}.min"), r.min)?;
         self.finite3(&format!("{key}.max"), r.max)?;
         if (0..3).any(|k| r.min[k] > r.max[k]) {
@@ -164,7 +164,67 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         }
         ctx.density(&format!("{key}.density"), m.density)?;
     }
-    for (i, gr) in f.ground.iter().enumerate() {
+    check_colliders(ctx, &f.ground, &f.ball)?;
+    for (i, a) in f.anchor.iter().enumerate() {
+        ctx.region(&format!("anchor[{i}].region"), &a.region)?;
+        if let Some(v) = a.velocity {
+            ctx.finite3(&format!("anchor[{i}].velocity"), v)?;
+        }
+        if let Some(w) = a.angular {
+            ctx.finite3(&format!("anchor[{i}].angular"), w)?;
+        }
+        match (a.center, a.angular) {
+            (Some(c), Some(_)) => {
+                ctx.finite3(&format!("anchor[{i}].center"), c)?;
+            }
+            (Some(_), None) => {
+                return Err(ctx.err(
+                    format!("anchor[{i}].center"),
+                    "is the centre of a rotation: give angular too",
+                ))
+            }
+            _ => {}
+        }
+        if let Some(t) = a.until {
+            ctx.non_negative(&format!("anchor[{i}].until"), t)?;
+        }
+    }
+    check_velocities(ctx, &f.velocity)?;
+    for (i, p) in f.precrack.iter().enumerate() {
+        let key = format!("precrack[{i}]");
+        ctx.finite3(&format!("{key}.point"), p.point)?;
+        ctx.direction(&format!("{key}.normal"), p.normal)?;
+        ctx.region(&format!("{key}.region"), &p.region)?;
+    }
+    if f.output.frames == Some(0) {
+        return Err(ctx.err("output.frames", "must be at least 1"));
+    }
+    if let Some(fps) = f.output.fps {
+        ctx.positive("output.fps", fps, "")?;
+        if fps > MAX_FPS {
+            return Err(ctx.err(
+                "output.fps",
+                format!("{fps} frames per second is more than {MAX_FPS}"),
+            ));
+        }
+    }
+    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
+        return Err(ctx.err(
+            "output.usd_pieces",
+            "lays out the USD cache, which is written only with usd = true",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the `[[ground]]` and `[[ball]]` tables: finite points and centres, unit-able normals,
+/// positive radii, one of mass or density, usable contact coefficients.
+pub(crate) fn check_colliders(
+    ctx: &Ctx,
+    grounds: &[GroundSpec],
+    balls: &[BallSpec],
+) -> Result<(), SceneError> {
+    for (i, gr) in grounds.iter().enumerate() {
         let key = format!("ground[{i}]");
         if let Some(p) = gr.point {
             ctx.finite3(&format!("{key}.point"), p)?;
@@ -180,7 +240,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             gr.friction,
         )?;
     }
-    for (i, b) in f.ball.iter().enumerate() {
+    for (i, b) in balls.iter().enumerate() {
         let key = format!("ball[{i}]");
         ctx.finite3(&format!("{key}.center"), b.center)?;
         ctx.positive(&format!("{key}.radius"), b.radius, "m")?;
@@ -219,31 +279,12 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
         }
         check_contact(ctx, &key, b.stiffness_factor, b.damping_ratio, b.friction)?;
     }
-    for (i, a) in f.anchor.iter().enumerate() {
-        ctx.region(&format!("anchor[{i}].region"), &a.region)?;
-        if let Some(v) = a.velocity {
-            ctx.finite3(&format!("anchor[{i}].velocity"), v)?;
-        }
-        if let Some(w) = a.angular {
-            ctx.finite3(&format!("anchor[{i}].angular"), w)?;
-        }
-        match (a.center, a.angular) {
-            (Some(c), Some(_)) => {
-                ctx.finite3(&format!("anchor[{i}].center"), c)?;
-            }
-            (Some(_), None) => {
-                return Err(ctx.err(
-                    format!("anchor[{i}].center"),
-                    "is the centre of a rotation: give angular too",
-                ))
-            }
-            _ => {}
-        }
-        if let Some(t) = a.until {
-            ctx.non_negative(&format!("anchor[{i}].until"), t)?;
-        }
-    }
-    for (i, v) in f.velocity.iter().enumerate() {
+    Ok(())
+}
+
+/// Checks the `[[velocity]]` tables: regions and finite vectors.
+pub(crate) fn check_velocities(ctx: &Ctx, velocities: &[VelocitySpec]) -> Result<(), SceneError> {
+    for (i, v) in velocities.iter().enumerate() {
         let key = format!("velocity[{i}]");
         if let Some(r) = &v.region {
             ctx.region(&format!("{key}.region"), r)?;
@@ -258,30 +299,6 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             }
         }
     }
-    for (i, p) in f.precrack.iter().enumerate() {
-        let key = format!("precrack[{i}]");
-        ctx.finite3(&format!("{key}.point"), p.point)?;
-        ctx.direction(&format!("{key}.normal"), p.normal)?;
-        ctx.region(&format!("{key}.region"), &p.region)?;
-    }
-    if f.output.frames == Some(0) {
-        return Err(ctx.err("output.frames", "must be at least 1"));
-    }
-    if let Some(fps) = f.output.fps {
-        ctx.positive("output.fps", fps, "")?;
-        if fps > MAX_FPS {
-            return Err(ctx.err(
-                "output.fps",
-                format!("{fps} frames per second is more than {MAX_FPS}"),
-            ));
-        }
-    }
-    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
-        return Err(ctx.err(
-            "output.usd_pieces",
-            "lays out the USD cache, which is written only with usd = true",
-        ));
-    }
     Ok(())
 }
 
@@ -291,7 +308,7 @@ pub const MAX_FPS: f64 = 1000.0;
 
 /// A collider's contact coefficients with the defaults filled in: `(stiffness factor, damping
 /// ratio, friction)`, all dimensionless.
-pub(super) fn contact_coefficients(
+pub(crate) fn contact_coefficients(
     stiffness: Option<f64>,
     damping: Option<f64>,
     friction: Option<f64>,

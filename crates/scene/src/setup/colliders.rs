@@ -7,14 +7,14 @@ use perifrac_contact::{BallDesc, BallMotion, Colliders, ContactParams, GroundDes
 use perifrac_topology::TetMesh;
 
 use crate::error::SceneError;
-use crate::schema::SceneFile;
+use crate::schema::{BallSpec, GroundSpec};
 
 use super::check::{contact_coefficients, Ctx};
 use super::material::Materials;
 
 /// What the colliders add to the highest frequency of the system, for the stable step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(super) struct ContactStiffness {
+pub(crate) struct ContactStiffness {
     /// Largest `omega^2` (1/s^2) of a particle on the colliders: the sum of their penalty
     /// stiffnesses (a particle can touch every collider at once, squeezed between a ball and
     /// the ground say, never one twice) times the largest stiffness scale over mass.
@@ -55,16 +55,18 @@ pub(super) fn stiffness_scale(
 /// The colliders and their stiffness, or `None` when the scene has none. `young` (Pa) and
 /// `radius` (mean contact radius, m) scale the penalty stiffness of a reference particle;
 /// particle `i` gets `scale[i]` times it, and has mass `masses[i]` (kg).
-pub(super) fn build_colliders(
+#[allow(clippy::too_many_arguments)] // the scene's two tables and the particles' scales
+pub(crate) fn build_colliders(
     ctx: &Ctx,
-    f: &SceneFile,
+    ground: &[GroundSpec],
+    ball: &[BallSpec],
     young: f64,
     radius: f64,
     gravity: [f64; 3],
     scale: &[f64],
     masses: &[f64],
 ) -> Result<Option<(Colliders, ContactStiffness)>, SceneError> {
-    if f.ground.is_empty() && f.ball.is_empty() {
+    if ground.is_empty() && ball.is_empty() {
         return Ok(None);
     }
     // The coefficients were checked with the rest of the settings (check::check_settings).
@@ -79,8 +81,7 @@ pub(super) fn build_colliders(
         .zip(masses)
         .map(|(&s, &m)| if m > 0.0 { s / m } else { 0.0 })
         .fold(0.0, f64::max);
-    let grounds: Vec<GroundDesc> = f
-        .ground
+    let grounds: Vec<GroundDesc> = ground
         .iter()
         .map(|g| GroundDesc {
             point: g.point.unwrap_or([0.0; 3]),
@@ -89,7 +90,7 @@ pub(super) fn build_colliders(
         })
         .collect();
     let mut balls = Vec::new();
-    for (i, b) in f.ball.iter().enumerate() {
+    for (i, b) in ball.iter().enumerate() {
         let velocity = b.velocity.unwrap_or([0.0; 3]);
         let mass = b
             .mass

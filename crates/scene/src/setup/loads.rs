@@ -4,7 +4,7 @@ use perifrac_physics::{AnchorMotion, Loads};
 
 use crate::driver::Releases;
 use crate::error::SceneError;
-use crate::schema::{Region, SceneFile};
+use crate::schema::{Region, SceneFile, VelocitySpec};
 
 use super::check::Ctx;
 use perifrac_physics::math::cross;
@@ -48,15 +48,15 @@ pub(super) fn loads(
 /// The `[[velocity]]` tables' initial velocities (m/s) per particle:
 /// `linear + angular x (X - center)`, later tables overriding earlier ones where their regions
 /// overlap, zero elsewhere.
-pub(super) fn initial_velocities(
+pub(crate) fn initial_velocities(
     ctx: &Ctx,
-    f: &SceneFile,
+    velocities: &[VelocitySpec],
     rest: &[[f64; 3]],
 ) -> Result<Vec<[f64; 3]>, SceneError> {
     let mut v = vec![[0.0; 3]; rest.len()];
     let (lo, hi) = bounds(rest);
     let centre = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-    for (k, vs) in f.velocity.iter().enumerate() {
+    for (k, vs) in velocities.iter().enumerate() {
         let picked = select(
             ctx,
             &format!("velocity[{k}].region"),
@@ -86,9 +86,9 @@ fn centroid(rest: &[[f64; 3]], picked: &[u32]) -> [f64; 3] {
     c.map(|v| v / picked.len() as f64)
 }
 
-/// Particles whose rest position lies in `region` (all when `None`); an empty selection is an
-/// error naming `key`.
-fn select(
+/// Particles (or a shell's vertices) whose rest position lies in `region` (all when `None`);
+/// an empty selection is an error naming `key`.
+pub(crate) fn select(
     ctx: &Ctx,
     key: &str,
     rest: &[[f64; 3]],
@@ -103,7 +103,8 @@ fn select(
     if picked.is_empty() {
         return Err(ctx.err(
             key,
-            "selects no particle (no tet barycentre inside the box)",
+            "selects nothing: no rest point (a tet's barycentre, a shell's vertex) lies inside the \
+             box",
         ));
     }
     Ok(picked)

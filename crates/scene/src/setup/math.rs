@@ -8,7 +8,7 @@ pub(crate) fn bounds(points: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
 }
 
 /// World up: opposite gravity, +z without gravity.
-pub(super) fn up_from_gravity(gravity: [f64; 3]) -> [f64; 3] {
+pub(crate) fn up_from_gravity(gravity: [f64; 3]) -> [f64; 3] {
     let g = norm(gravity);
     if g > 0.0 {
         gravity.map(|c| -c / g)

@@ -2,17 +2,17 @@
 //! mesh, materials by region, initial cracks, the peridynamic model, colliders, loads and the
 //! time step. Nothing is written to disk here.
 
-mod check;
+pub(crate) mod check;
 pub use check::MAX_FPS;
-mod colliders;
-mod loads;
+pub(crate) mod colliders;
+pub(crate) mod loads;
 mod material;
-mod math;
+pub(crate) mod math;
 mod mesh;
 mod radii;
 mod self_contact;
 mod solver;
-mod step;
+pub(crate) mod step;
 mod xu_material;
 
 use std::path::PathBuf;
@@ -280,7 +280,8 @@ impl Setup {
             colliders::stiffness_scale(&materials, &ids, &radii, young, mean_radius);
         let mut colliders = colliders::build_colliders(
             &ctx,
-            f,
+            &f.ground,
+            &f.ball,
             young,
             mean_radius,
             gravity,
@@ -298,7 +299,7 @@ impl Setup {
             contact.self_omega2 = sc.max_omega2(model.as_dyn().masses());
         }
 
-        let velocities = loads::initial_velocities(&ctx, f, &rest)?;
+        let velocities = loads::initial_velocities(&ctx, &f.velocity, &rest)?;
         let travel = |fraction| {
             colliders.as_ref().map_or(f64::INFINITY, |(c, _)| {
                 step::travel_limit(c, mean_radius, &velocities, fraction)

@@ -117,7 +117,7 @@ pub(super) fn implicit_step(
 ///
 /// `steps_per_frame` saturates at `u64::MAX` for a step far below the frame (or a zero one);
 /// the step budget refuses such a run.
-pub(super) fn fit_to_frames(duration: f64, frames: usize, wanted: f64) -> (f64, u64) {
+pub(crate) fn fit_to_frames(duration: f64, frames: usize, wanted: f64) -> (f64, u64) {
     let frame_dt = duration / frames as f64;
     // `as` saturates, and takes NaN to 0 (then 1).
     let steps_per_frame = ((frame_dt / wanted).ceil() as u64).max(1);

@@ -1,0 +1,424 @@
+//! Running a thin-shell scene: steps between frames, frames into a run directory laid out as a
+//! tet run's (`run.json`, `scene.toml`, `frames/surface_NNNN.ply` with per-face `crack` and
+//! `fragment`, `frames/surface_NNNN.inc`), so `perifrac render` reads it as it is. Every file
+//! is written to a temporary name and renamed into place.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
+use serde::Serialize;
+
+use crate::error::SceneError;
+use crate::output::{
+    clear_output_dir, BallJson, Bounds, GroundJson, SearchJson, POVRAY_MESH_NAME, RUN_FORMAT,
+};
+use crate::run::{Observer, Progress};
+use crate::setup::math::bounds;
+
+use super::setup::ShellSetup;
+
+/// `run.json` of a shell run: the fields `perifrac render` reads from a tet run's
+/// ([`crate::RunManifest`]), with the shell's own counts. It holds no wall times, so two runs
+/// of one scene give identical files.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShellManifest {
+    /// [`RUN_FORMAT`].
+    pub format: String,
+    /// `"shell"`: what the run simulated.
+    pub body: String,
+    /// File name of the scene.
+    pub scene: String,
+    /// World up (unit vector).
+    pub up: [f64; 3],
+    /// Rest bounding box of the surface (m).
+    pub rest_bounds: Bounds,
+    /// Ground planes.
+    pub grounds: Vec<GroundJson>,
+    /// Vertices at the start.
+    pub vertices: usize,
+    /// Triangles at the start.
+    pub triangles: usize,
+    /// Rest thickness (m).
+    pub thickness: f64,
+    /// Thickness given to every piece in the frames (m; 0: the mid-surface).
+    pub frame_thickness: f64,
+    /// Time step (s).
+    pub dt: f64,
+    /// Measured stable limit (s).
+    pub dt_limit: f64,
+    /// The event search's finest level (0: none).
+    pub event_levels: u32,
+    /// Total mass (kg).
+    pub mass: f64,
+    /// Frames written so far.
+    pub frames: Vec<ShellFrameJson>,
+    /// True once the last frame is written.
+    pub finished: bool,
+    /// Why the run stopped early, if it did.
+    pub error: Option<String>,
+}
+
+/// One frame of a shell run in `run.json`; paths relative to the run directory.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShellFrameJson {
+    /// 0 is the rest state.
+    pub index: usize,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Steps taken up to this frame.
+    pub step: u64,
+    /// Surface PLY.
+    pub surface: String,
+    /// POV-Ray include, when written.
+    pub povray: Option<String>,
+    /// Balls at this time.
+    pub balls: Vec<BallJson>,
+    /// Bounds of the surface (m).
+    pub bounds: Bounds,
+    /// The same (every piece is framed).
+    pub main_bounds: Bounds,
+    /// Connected pieces.
+    pub fragments: usize,
+    /// Triangles broken so far.
+    pub broken_triangles: usize,
+    /// Crack edges in the mesh.
+    pub crack_edges: usize,
+    /// Triangles and vertices of the mesh now.
+    pub mesh_triangles: usize,
+    /// Vertices of the mesh now.
+    pub mesh_vertices: usize,
+    /// Triangles that have yielded.
+    pub yielded: usize,
+    /// Kinetic energy (J).
+    pub kinetic_energy: f64,
+    /// Elastic energy (J).
+    pub elastic_energy: f64,
+    /// Runs with the event search: sub-steps so far.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search: Option<SearchJson>,
+}
+
+/// The end of a shell run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShellSummary {
+    /// Steps taken.
+    pub steps: u64,
+    /// Simulated time (s).
+    pub time: f64,
+    /// The step (s).
+    pub dt: f64,
+    /// Triangles broken.
+    pub broken_triangles: usize,
+    /// Pieces at the end.
+    pub fragments: usize,
+    /// Triangles that have yielded, at the end.
+    pub yielded: usize,
+    /// Sub-steps taken and trials discarded (both equal to steps and 0 without the search).
+    pub substeps: u64,
+    /// Trial sub-steps discarded.
+    pub rejected: u64,
+    /// Kinetic and elastic energy at the end (J).
+    pub kinetic_energy: f64,
+    /// Elastic energy at the end (J).
+    pub elastic_energy: f64,
+    /// Frames written, the initial one included.
+    pub frames_written: usize,
+    /// Wall time stepping, and writing frames.
+    pub physics_time: Duration,
+    /// Wall time writing frames.
+    pub output_time: Duration,
+}
+
+/// Runs a shell scene to the end, writing frames into `dir` (cleared of an earlier run's
+/// files first, as for tet runs). On an instability the frames written so far stay,
+/// `run.json` records the error and [`SceneError::ShellStopped`] is returned; an interruption
+/// the observer reports stops the run the same way (shell runs write no checkpoint).
+pub fn run_shell(
+    mut setup: ShellSetup,
+    dir: &Path,
+    observer: &mut dyn Observer,
+) -> Result<ShellSummary, SceneError> {
+    clear_output_dir(dir)?;
+    let mut writer = ShellWriter::start(dir, &setup)?;
+    let total_steps = setup.steps_per_frame.saturating_mul(setup.frames as u64);
+    let duration = setup.steps_per_frame as f64 * setup.info.dt * setup.frames as f64;
+    let mut steps = 0u64;
+    // Plain steps: how many equal parts each step is cut into (more after splits shrink the
+    // triangles).
+    let mut substeps = 1u64;
+    let mut physics_time = Duration::ZERO;
+    let mut output_time = Duration::ZERO;
+    let t = Instant::now();
+    let mut fragments = writer.write_frame(0, steps, &setup, false)?.fragments;
+    output_time += t.elapsed();
+    for index in 1..=setup.frames {
+        for _ in 0..setup.steps_per_frame {
+            let t = Instant::now();
+            let stepped = advance(&mut setup, &mut substeps);
+            physics_time += t.elapsed();
+            let progress = Progress {
+                time: setup.shell.shell().time(),
+                duration,
+                steps,
+                total_steps,
+                broken_bonds: setup.shell.stats().events.len() as u64,
+                fragments,
+                frames_written: index,
+            };
+            if let Err(cause) = stepped {
+                return Err(stop(&mut writer, &progress, cause.to_string()));
+            }
+            steps += 1;
+            observer.step(&Progress { steps, ..progress });
+            if observer.interrupted() {
+                return Err(stop(&mut writer, &progress, "interrupted".into()));
+            }
+        }
+        let t = Instant::now();
+        let frame = writer.write_frame(index, steps, &setup, index == setup.frames)?;
+        output_time += t.elapsed();
+        fragments = frame.fragments;
+        observer.frame(&Progress {
+            time: setup.shell.shell().time(),
+            duration,
+            steps,
+            total_steps,
+            broken_bonds: setup.shell.stats().events.len() as u64,
+            fragments,
+            frames_written: index + 1,
+        });
+    }
+    let s = setup.shell.shell();
+    Ok(ShellSummary {
+        steps,
+        time: s.time(),
+        dt: setup.info.dt,
+        broken_triangles: setup.shell.stats().events.len(),
+        fragments,
+        yielded: s.model().yielded(),
+        substeps: setup.shell.stats().substeps,
+        rejected: setup.shell.stats().rejected,
+        kinetic_energy: s.kinetic_energy(),
+        elastic_energy: s.elastic_energy(),
+        frames_written: setup.frames + 1,
+        physics_time,
+        output_time,
+    })
+}
+
+/// One step of the scene. With the event search, the search covers it. Without, it is cut into
+/// `substeps` equal parts, fracture checked after each; when triangles broke, the stable step
+/// is measured again on the new mesh and `substeps` raised so each part stays within the
+/// scene's share of it (splits make triangles smaller, and a step that was stable before can
+/// run away after).
+fn advance(setup: &mut ShellSetup, substeps: &mut u64) -> Result<(), perifrac_shell::ShellError> {
+    let dt = setup.info.dt;
+    if setup.info.event_levels > 0 {
+        return setup.shell.advance(dt);
+    }
+    let before = setup.shell.stats().events.len();
+    for _ in 0..*substeps {
+        setup.shell.advance(dt / *substeps as f64)?;
+    }
+    if setup.shell.stats().events.len() > before {
+        let omega = 2.0 / setup.shell.shell_mut().stable_step()?;
+        let limit = 2.0 / (omega * omega + setup.info.collider_omega2).sqrt();
+        let wanted = setup.info.safety * limit;
+        let needed = (dt / wanted).ceil();
+        if needed.is_finite() && needed as u64 > *substeps {
+            *substeps = needed as u64;
+        }
+    }
+    Ok(())
+}
+
+/// Records why the run stopped in `run.json` and makes the error to return.
+fn stop(writer: &mut ShellWriter, at: &Progress, cause: String) -> SceneError {
+    if let Err(e) = writer.record_error(cause.clone()) {
+        return e;
+    }
+    SceneError::ShellStopped {
+        time: at.time,
+        step: at.steps,
+        frames: writer.manifest.frames.len(),
+        cause,
+    }
+}
+
+/// Writes a shell run's frames and `run.json`.
+struct ShellWriter {
+    dir: PathBuf,
+    manifest: ShellManifest,
+}
+
+impl ShellWriter {
+    /// `run.json` first (whatever fails after it is recorded in it), then `scene.toml` and
+    /// `frames/`.
+    fn start(dir: &Path, setup: &ShellSetup) -> Result<ShellWriter, SceneError> {
+        let info = &setup.info;
+        let shell = setup.shell.shell();
+        let manifest = ShellManifest {
+            format: RUN_FORMAT.into(),
+            body: "shell".into(),
+            scene: setup
+                .scene_path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            up: info.up,
+            rest_bounds: Bounds {
+                min: info.rest_bounds.0,
+                max: info.rest_bounds.1,
+            },
+            grounds: shell
+                .colliders()
+                .map(|c| {
+                    c.grounds()
+                        .map(|g| GroundJson {
+                            point: g.point,
+                            normal: g.normal,
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            vertices: info.vertices,
+            triangles: info.triangles,
+            thickness: info.thickness,
+            frame_thickness: setup.frame_thickness,
+            dt: info.dt,
+            dt_limit: info.dt_limit,
+            event_levels: info.event_levels,
+            mass: info.mass,
+            frames: Vec::new(),
+            finished: false,
+            error: None,
+        };
+        let mut writer = ShellWriter {
+            dir: dir.to_path_buf(),
+            manifest,
+        };
+        writer.write_manifest()?;
+        let rest = perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
+            w.write_all(setup.scene_text.as_bytes())
+        })
+        .map_err(SceneError::from)
+        .and_then(|()| {
+            std::fs::create_dir_all(dir.join("frames")).map_err(|e| SceneError::Output {
+                dir: dir.to_path_buf(),
+                message: format!("cannot create frames/: {e}"),
+            })
+        });
+        if let Err(e) = rest {
+            let _ = writer.record_error(e.to_string());
+            return Err(e);
+        }
+        Ok(writer)
+    }
+
+    fn write_manifest(&self) -> Result<(), SceneError> {
+        let text =
+            serde_json::to_string_pretty(&self.manifest).map_err(|e| SceneError::Output {
+                dir: self.dir.clone(),
+                message: format!("cannot encode run.json: {e}"),
+            })?;
+        perifrac_io::atomic_write(&self.dir.join("run.json"), |w| {
+            w.write_all(text.as_bytes())?;
+            w.write_all(b"\n")
+        })
+        .map_err(SceneError::from)
+    }
+
+    fn record_error(&mut self, message: String) -> Result<(), SceneError> {
+        self.manifest.error = Some(message);
+        self.write_manifest()
+    }
+
+    /// Writes frame `index` and records it (`last` marks the run finished).
+    fn write_frame(
+        &mut self,
+        index: usize,
+        step: u64,
+        setup: &ShellSetup,
+        last: bool,
+    ) -> Result<ShellFrameJson, SceneError> {
+        let searched = &setup.shell;
+        let shell = searched.shell();
+        let model = shell.model();
+        let x = shell.positions();
+        let thickness = (setup.frame_thickness > 0.0).then_some(setup.frame_thickness);
+        let m = model.frame(x, thickness);
+        let surface = SurfaceRef {
+            crack: Some(&m.crack),
+            fragment: Some(&m.piece),
+            ..SurfaceRef::new(&m.vertices, &m.triangles)
+        };
+        let name = format!("frames/surface_{index:04}.ply");
+        let written = write_ply(
+            &self.dir.join(&name),
+            &surface,
+            PlyEncoding::BinaryLittleEndian,
+        )
+        .map_err(SceneError::from)
+        .and_then(|()| {
+            if !setup.povray {
+                return Ok(None);
+            }
+            let inc = format!("frames/surface_{index:04}.inc");
+            write_povray_mesh2(&self.dir.join(&inc), &surface, POVRAY_MESH_NAME)
+                .map(|()| Some(inc))
+                .map_err(SceneError::from)
+        });
+        let povray = match written {
+            Ok(p) => p,
+            Err(e) => {
+                let _ = self.record_error(e.to_string());
+                return Err(e);
+            }
+        };
+        let (lo, hi) = bounds(&m.vertices);
+        let b = Bounds { min: lo, max: hi };
+        let crack_edges = model
+            .crack_edges()
+            .iter()
+            .map(|c| c.iter().filter(|&&k| k).count())
+            .sum();
+        let frame = ShellFrameJson {
+            index,
+            time: shell.time(),
+            step,
+            surface: name,
+            povray,
+            balls: shell
+                .colliders()
+                .map(|c| {
+                    c.balls()
+                        .map(|ball| BallJson {
+                            center: ball.center,
+                            radius: ball.radius,
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            bounds: b,
+            main_bounds: b,
+            fragments: m.piece.iter().max().map_or(0, |p| *p as usize + 1),
+            broken_triangles: searched.stats().events.len(),
+            crack_edges,
+            mesh_triangles: model.mesh().triangles().len(),
+            mesh_vertices: x.len(),
+            yielded: model.yielded(),
+            kinetic_energy: shell.kinetic_energy(),
+            elastic_energy: shell.elastic_energy(),
+            search: (setup.info.event_levels > 0).then(|| SearchJson {
+                substeps: searched.stats().substeps,
+                rejected: searched.stats().rejected,
+            }),
+        };
+        self.manifest.frames.push(frame.clone());
+        self.manifest.finished = last;
+        self.write_manifest()?;
+        Ok(frame)
+    }
+}
