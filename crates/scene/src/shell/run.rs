@@ -77,7 +77,8 @@ pub struct ShellFrameJson {
     pub balls: Vec<BallJson>,
     /// Bounds of the surface (m).
     pub bounds: Bounds,
-    /// The same (every piece is framed).
+    /// Bounds of the largest pieces that together hold [`crate::output::MAIN_MASS_SHARE`] of
+    /// the triangles (m): flying chips do not shrink the picture.
     pub main_bounds: Bounds,
     /// Connected pieces.
     pub fragments: usize,
@@ -402,7 +403,7 @@ impl ShellWriter {
                 })
                 .unwrap_or_default(),
             bounds: b,
-            main_bounds: b,
+            main_bounds: main_bounds(&m.vertices, &m.triangles, &m.piece),
             fragments: m.piece.iter().max().map_or(0, |p| *p as usize + 1),
             broken_triangles: searched.stats().events.len(),
             crack_edges,
@@ -421,4 +422,36 @@ impl ShellWriter {
         self.write_manifest()?;
         Ok(frame)
     }
+}
+
+/// Bounds (m) of the pieces with the most triangles that together hold
+/// [`crate::output::MAIN_MASS_SHARE`] of them (a shell's mass goes with its area, and its
+/// triangles are of about one size).
+fn main_bounds(x: &[[f64; 3]], triangles: &[[u32; 3]], piece: &[u32]) -> Bounds {
+    let pieces = piece.iter().max().map_or(0, |p| *p as usize + 1);
+    let mut count = vec![0usize; pieces];
+    for &p in piece {
+        count[p as usize] += 1;
+    }
+    let mut order: Vec<usize> = (0..pieces).collect();
+    // most triangles first; ties by id, so the choice is deterministic
+    order.sort_by(|&a, &b| count[b].cmp(&count[a]).then(a.cmp(&b)));
+    let mut kept = vec![false; pieces];
+    let mut sum = 0usize;
+    let want = crate::output::MAIN_MASS_SHARE * piece.len() as f64;
+    for p in order {
+        if sum as f64 >= want {
+            break;
+        }
+        kept[p] = true;
+        sum += count[p];
+    }
+    let points: Vec<[f64; 3]> = triangles
+        .iter()
+        .zip(piece)
+        .filter(|(_, &p)| kept[p as usize])
+        .flat_map(|(t, _)| t.map(|i| x[i as usize]))
+        .collect();
+    let (min, max) = bounds(&points);
+    Bounds { min, max }
 }
