@@ -331,6 +331,19 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
             s.substeps as f64 / s.steps.max(1) as f64,
         );
     }
+    let stepping = s.physics_time.as_secs_f64().max(1e-9);
+    eprintln!(
+        "speed: {:.3e} triangle updates/s ({:.3e} per thread){}",
+        s.triangle_updates as f64 / stepping,
+        s.triangle_updates as f64 / stepping / threads as f64,
+        match s.self_contact {
+            Some((secs, builds)) => format!(
+                ", self contact {secs:.2} s ({:.1}% of stepping, {builds} list builds)",
+                100.0 * secs / stepping
+            ),
+            None => String::new(),
+        }
+    );
     eprintln!(
         "{} frames in {} (stepping {:.2} s, output {:.2} s)",
         s.frames_written,

@@ -130,6 +130,11 @@ pub struct ShellSummary {
     pub physics_time: Duration,
     /// Wall time writing frames.
     pub output_time: Duration,
+    /// Triangle force updates: every sub-step and discarded trial times the triangles then.
+    pub triangle_updates: u64,
+    /// Self contact, when on: wall time (s, discarded trials included) and candidate-list
+    /// builds.
+    pub self_contact: Option<(f64, u64)>,
 }
 
 /// Runs a shell scene to the end, writing frames into `dir` (cleared of an earlier run's
@@ -149,6 +154,7 @@ pub fn run_shell(
     // Plain steps: how many equal parts each step is cut into (more after splits shrink the
     // triangles).
     let mut substeps = 1u64;
+    let mut updates = 0u64;
     let mut physics_time = Duration::ZERO;
     let mut output_time = Duration::ZERO;
     let t = Instant::now();
@@ -157,8 +163,11 @@ pub fn run_shell(
     for index in 1..=setup.frames {
         for _ in 0..setup.steps_per_frame {
             let t = Instant::now();
+            let evaluated = evaluations(&setup);
             let stepped = advance(&mut setup, &mut substeps);
             physics_time += t.elapsed();
+            let triangles = setup.shell.shell().model().mesh().triangles().len() as u64;
+            updates += (evaluations(&setup) - evaluated) * triangles;
             let progress = Progress {
                 time: setup.shell.shell().time(),
                 duration,
@@ -206,7 +215,18 @@ pub fn run_shell(
         frames_written: setup.frames + 1,
         physics_time,
         output_time,
+        triangle_updates: updates,
+        self_contact: s.self_contact().is_some().then(|| {
+            let st = s.self_contact_stats();
+            (st.total_seconds, st.builds)
+        }),
     })
+}
+
+/// Force evaluations so far: sub-steps taken and trials discarded.
+fn evaluations(setup: &ShellSetup) -> u64 {
+    let st = setup.shell.stats();
+    st.substeps + st.rejected
 }
 
 /// One step of the scene. With the event search, the search covers it. Without, it is cut into
