@@ -86,7 +86,7 @@ pub struct ShellFrameJson {
     pub broken_triangles: usize,
     /// Crack edges in the mesh.
     pub crack_edges: usize,
-    /// Triangles and vertices of the mesh now.
+    /// Triangles of the mesh now.
     pub mesh_triangles: usize,
     /// Vertices of the mesh now.
     pub mesh_vertices: usize,
@@ -116,17 +116,17 @@ pub struct ShellSummary {
     pub fragments: usize,
     /// Triangles that have yielded, at the end.
     pub yielded: usize,
-    /// Sub-steps taken and trials discarded (both equal to steps and 0 without the search).
+    /// Sub-steps taken (the steps, or more where steps were cut or searched).
     pub substeps: u64,
     /// Trial sub-steps discarded.
     pub rejected: u64,
-    /// Kinetic and elastic energy at the end (J).
+    /// Kinetic energy at the end (J).
     pub kinetic_energy: f64,
     /// Elastic energy at the end (J).
     pub elastic_energy: f64,
     /// Frames written, the initial one included.
     pub frames_written: usize,
-    /// Wall time stepping, and writing frames.
+    /// Wall time stepping.
     pub physics_time: Duration,
     /// Wall time writing frames.
     pub output_time: Duration,
