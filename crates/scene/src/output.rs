@@ -315,16 +315,7 @@ impl FrameWriter {
         };
         // run.json first: whatever fails after it is recorded in it.
         writer.write_manifest()?;
-        let rest = perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
-            w.write_all(scene_text.as_bytes())
-        })
-        .map_err(SceneError::from)
-        .and_then(|()| {
-            std::fs::create_dir_all(&writer.frames_dir).map_err(|e| SceneError::Output {
-                dir: dir.to_path_buf(),
-                message: format!("cannot create frames/: {e}"),
-            })
-        });
+        let rest = write_scene_and_frames_dir(dir, scene_text);
         if let Err(e) = rest {
             // Best effort: the error itself is what the caller reports.
             let _ = writer.record_error(e.to_string());
@@ -545,6 +536,17 @@ impl FrameWriter {
         perifrac_io::atomic_write(&self.dir.join("run.json"), |w| w.write_all(text.as_bytes()))?;
         Ok(())
     }
+}
+
+/// Writes `scene.toml` (the scene as run) into the run directory `dir` and creates `frames/`.
+pub(crate) fn write_scene_and_frames_dir(dir: &Path, scene_text: &str) -> Result<(), SceneError> {
+    perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
+        w.write_all(scene_text.as_bytes())
+    })?;
+    std::fs::create_dir_all(dir.join("frames")).map_err(|e| SceneError::Output {
+        dir: dir.to_path_buf(),
+        message: format!("cannot create frames/: {e}"),
+    })
 }
 
 /// Removes an earlier run's files from `dir` (and nothing else), creating `dir` if needed.

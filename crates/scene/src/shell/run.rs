@@ -12,7 +12,8 @@ use serde::Serialize;
 
 use crate::error::SceneError;
 use crate::output::{
-    clear_output_dir, BallJson, Bounds, GroundJson, SearchJson, POVRAY_MESH_NAME, RUN_FORMAT,
+    clear_output_dir, write_scene_and_frames_dir, BallJson, Bounds, GroundJson, SearchJson,
+    POVRAY_MESH_NAME, RUN_FORMAT,
 };
 use crate::run::{Observer, Progress};
 use crate::setup::math::bounds;
@@ -321,16 +322,7 @@ impl ShellWriter {
             manifest,
         };
         writer.write_manifest()?;
-        let rest = perifrac_io::atomic_write(&dir.join("scene.toml"), |w| {
-            w.write_all(setup.scene_text.as_bytes())
-        })
-        .map_err(SceneError::from)
-        .and_then(|()| {
-            std::fs::create_dir_all(dir.join("frames")).map_err(|e| SceneError::Output {
-                dir: dir.to_path_buf(),
-                message: format!("cannot create frames/: {e}"),
-            })
-        });
+        let rest = write_scene_and_frames_dir(dir, &setup.scene_text);
         if let Err(e) = rest {
             let _ = writer.record_error(e.to_string());
             return Err(e);

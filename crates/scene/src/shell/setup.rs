@@ -585,8 +585,18 @@ fn surface(
         Ok(n)
     };
     // keys a surface does not use are refused, so a misplaced one is not silently ignored
-    let unused = |keys: &[(&str, bool)]| -> Result<(), SceneError> {
-        match keys.iter().find(|(_, set)| *set) {
+    let set = [
+        ("radius", s.radius.is_some()),
+        ("radii", s.radii.is_some()),
+        ("length", s.length.is_some()),
+        ("size", s.size.is_some()),
+        ("cells", s.cells.is_some()),
+        ("subdivisions", s.subdivisions.is_some()),
+        ("opening", s.opening.is_some()),
+        ("diagonals", s.diagonals.is_some()),
+    ];
+    let only = |used: &[&str]| -> Result<(), SceneError> {
+        match set.iter().find(|(k, given)| *given && !used.contains(k)) {
             Some((k, _)) => Err(ctx.err(
                 format!("shell.{k}"),
                 format!(
@@ -610,16 +620,7 @@ fn surface(
             ))
         }
         (None, Some(file)) => {
-            unused(&[
-                ("radius", s.radius.is_some()),
-                ("radii", s.radii.is_some()),
-                ("length", s.length.is_some()),
-                ("size", s.size.is_some()),
-                ("cells", s.cells.is_some()),
-                ("subdivisions", s.subdivisions.is_some()),
-                ("opening", s.opening.is_some()),
-                ("diagonals", s.diagonals.is_some()),
-            ])?;
+            only(&[])?;
             let path = scene.path.parent().unwrap_or(Path::new(".")).join(file);
             let data = perifrac_io::read_surface(&path).map_err(|e| SceneError::Mesh {
                 file: scene.path.clone(),
@@ -631,25 +632,11 @@ fn surface(
             }
         }
         (Some("sphere"), None) => {
-            unused(&[
-                ("radii", s.radii.is_some()),
-                ("length", s.length.is_some()),
-                ("size", s.size.is_some()),
-                ("cells", s.cells.is_some()),
-                ("opening", s.opening.is_some()),
-                ("diagonals", s.diagonals.is_some()),
-            ])?;
+            only(&["radius", "subdivisions"])?;
             generate::icosphere(need(s.radius, "radius", "m")?, subdivisions()?).map_err(gen_err)?
         }
         (Some("ellipsoid"), None) => {
-            unused(&[
-                ("radius", s.radius.is_some()),
-                ("length", s.length.is_some()),
-                ("size", s.size.is_some()),
-                ("cells", s.cells.is_some()),
-                ("opening", s.opening.is_some()),
-                ("diagonals", s.diagonals.is_some()),
-            ])?;
+            only(&["radii", "subdivisions"])?;
             let Some(r) = s.radii else {
                 return Err(ctx.err("shell.radii", "an ellipsoid needs its three semi-axes"));
             };
@@ -659,13 +646,7 @@ fn surface(
             generate::ellipsoid(r, subdivisions()?).map_err(gen_err)?
         }
         (Some("cylinder"), None) => {
-            unused(&[
-                ("radii", s.radii.is_some()),
-                ("size", s.size.is_some()),
-                ("subdivisions", s.subdivisions.is_some()),
-                ("opening", s.opening.is_some()),
-                ("diagonals", s.diagonals.is_some()),
-            ])?;
+            only(&["radius", "length", "cells"])?;
             let [around, along] = cells([32, 16], [3, 1])?;
             generate::cylinder(
                 need(s.radius, "radius", "m")?,
@@ -676,13 +657,7 @@ fn surface(
             .map_err(gen_err)?
         }
         (Some("sheet"), None) => {
-            unused(&[
-                ("radius", s.radius.is_some()),
-                ("radii", s.radii.is_some()),
-                ("length", s.length.is_some()),
-                ("subdivisions", s.subdivisions.is_some()),
-                ("opening", s.opening.is_some()),
-            ])?;
+            only(&["size", "cells", "diagonals"])?;
             let Some([w, h]) = s.size else {
                 return Err(ctx.err("shell.size", "a sheet needs its extent along x and y"));
             };
@@ -702,13 +677,7 @@ fn surface(
             .map_err(gen_err)?
         }
         (Some("bowl"), None) => {
-            unused(&[
-                ("radii", s.radii.is_some()),
-                ("length", s.length.is_some()),
-                ("size", s.size.is_some()),
-                ("subdivisions", s.subdivisions.is_some()),
-                ("diagonals", s.diagonals.is_some()),
-            ])?;
+            only(&["radius", "opening", "cells"])?;
             let opening = s.opening.unwrap_or(defaults::OPENING);
             if !(opening > 0.0 && opening < 180.0) {
                 return Err(ctx.err(
