@@ -363,19 +363,25 @@ fn crack_panel(s: &Surface, piece: u32, axis: [f64; 3], caption: String) -> Pane
 
 /// A temporary directory for generated meshes.
 fn tempfile_dir() -> Result<TempDir, BenchError> {
-    let base = std::env::temp_dir().join(format!("perifrac-look-{}", std::process::id()));
+    temp_dir("look")
+}
+
+/// A temporary directory named for `case` and this process, removed when dropped.
+pub(crate) fn temp_dir(case: &str) -> Result<TempDir, BenchError> {
+    let base = std::env::temp_dir().join(format!("perifrac-{case}-{}", std::process::id()));
     std::fs::create_dir_all(&base).map_err(|e| BenchError::Scene {
-        case: "look".into(),
+        case: case.into(),
         message: format!("cannot create {}: {e}", base.display()),
     })?;
     Ok(TempDir(base))
 }
 
 /// A directory removed when dropped.
-struct TempDir(std::path::PathBuf);
+pub(crate) struct TempDir(std::path::PathBuf);
 
 impl TempDir {
-    fn path(&self) -> &Path {
+    /// The directory.
+    pub(crate) fn path(&self) -> &Path {
         &self.0
     }
 }

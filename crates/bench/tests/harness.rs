@@ -72,6 +72,16 @@ fn accuracy_rows_are_finite_and_refinement_helps_the_cantilever() {
         assert!(r.runs[0].error > 0.0, "{name}");
         assert_eq!(r.tables[0].1.rows.len(), 1, "{name}");
     }
+    // The shells' coarsest plates sag less than Kirchhoff's answer (measured -19.0% for the
+    // strip at 10x2 and -9.5% for the square at 8x8: the model is too stiff on coarse meshes,
+    // converging at first order), so within (-30%, 0).
+    for name in ["shell_strip", "shell_plate"] {
+        let run = &by_name(name).runs[0];
+        assert!(run.error < 0.0 && run.error > -0.3, "{name}: {run:?}");
+    }
+    // A uniform stretch: the pull is the closed form to round-off (measured 3e-14).
+    let membrane = &by_name("shell_membrane").runs[0];
+    assert!(membrane.error.abs() < 1e-10, "{membrane:?}");
     let cantilever = &reports[0];
     let pd: Vec<_> = cantilever
         .runs
@@ -321,24 +331,9 @@ fn look_tables_hold_every_case_with_sound_pieces() {
 }
 
 #[test]
-fn shell_tables_hold_finite_deflections_and_every_egg_run() {
-    // Tiny: one strip, one plate, the egg stepped plainly and searched for 0.2 ms.
+fn shell_egg_table_holds_every_run() {
+    // Tiny: the egg stepped plainly and searched for 0.2 ms.
     let mut quiet = |_: &str| {};
-    let plates = perifrac_bench::shells::plates(Effort::Tiny, &mut quiet).unwrap();
-    assert_eq!(plates.rows.len(), 2);
-    for r in &plates.rows {
-        // The deflection column: positive and within a factor of two of Kirchhoff's (the
-        // coarsest meshes were measured at -19% and -9%).
-        let w: f64 = r[4].parse().unwrap();
-        let k: f64 = r[5].parse().unwrap();
-        assert!(w > 0.5 * k && w < 1.5 * k, "{r:?}");
-    }
-    // A uniform stretch: the pull is the closed form to round-off (measured 3e-14).
-    let membrane = perifrac_bench::shells::membrane(Effort::Tiny).unwrap();
-    for r in &membrane.rows {
-        let err: f64 = r[3].parse().unwrap();
-        assert!(err < 1e-10, "{r:?}");
-    }
     let (egg, text) = perifrac_bench::shells::egg_drop(Effort::Tiny, &mut quiet).unwrap();
     assert_eq!(egg.rows.len(), 2);
     assert!(text.contains("triangles"));

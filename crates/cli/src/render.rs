@@ -56,6 +56,36 @@ pub struct RenderArgs {
     /// Only write the .pov scenes; do not run povray.
     #[arg(long)]
     pub no_povray: bool,
+    /// Camera azimuth (degrees) round the up axis, from the first horizontal axis (x when z is
+    /// up) towards minus the second.
+    #[arg(long, default_value_t = CAMERA_AZIMUTH_DEG, allow_negative_numbers = true)]
+    pub azimuth: f64,
+    /// Camera elevation (degrees, in [-85, 85]) above the horizontal plane through what it
+    /// looks at; below 0 it looks up from beneath, and the grounds turn see-through.
+    #[arg(long, default_value_t = CAMERA_ELEVATION_DEG, allow_negative_numbers = true)]
+    pub elevation: f64,
+    /// How much closer than the framing of the whole run the camera comes (> 0; 2 is twice
+    /// as close, the object twice as large).
+    #[arg(long, default_value_t = 1.0)]
+    pub zoom: f64,
+}
+
+/// Where the camera sits: azimuth and elevation (degrees) and zoom.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Aim {
+    azimuth: f64,
+    elevation: f64,
+    zoom: f64,
+}
+
+impl Default for Aim {
+    fn default() -> Self {
+        Aim {
+            azimuth: CAMERA_AZIMUTH_DEG,
+            elevation: CAMERA_ELEVATION_DEG,
+            zoom: 1.0,
+        }
+    }
 }
 
 /// `run.json`, as far as rendering needs it; unknown fields are ignored.
@@ -128,6 +158,9 @@ struct View {
     lowest: f64,
     /// Width over height of the picture.
     aspect: f64,
+    /// Camera azimuth and elevation (degrees).
+    azimuth: f64,
+    elevation: f64,
 }
 
 /// Runs `perifrac render`.
@@ -137,6 +170,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         "--antialias must be a threshold >= 0, got {}",
         args.antialias
     );
+    ensure!(
+        args.azimuth.is_finite(),
+        "--azimuth must be an angle in degrees, got {}",
+        args.azimuth
+    );
+    ensure!(
+        (-85.0..=85.0).contains(&args.elevation),
+        "--elevation must be in [-85, 85] degrees, got {}",
+        args.elevation
+    );
+    ensure!(
+        args.zoom.is_finite() && args.zoom > 0.0,
+        "--zoom must be > 0, got {}",
+        args.zoom
+    );
+    let aim = Aim {
+        azimuth: args.azimuth,
+        elevation: args.elevation,
+        zoom: args.zoom,
+    };
     let dir = &args.dir;
     ensure!(
         dir.is_dir(),
@@ -145,7 +198,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     );
     let run = read_run(dir)?;
     let selected = select_frames(&run, args)?;
-    let view = frame_view(&run, args.width, args.height)?;
+    let view = frame_view(&run, args.width, args.height, aim)?;
 
     let render_dir = dir.join("render");
     std::fs::create_dir_all(&render_dir)
@@ -303,7 +356,7 @@ fn select_frames<'a>(run: &'a RunFile, args: &RenderArgs) -> Result<Vec<&'a Fram
 /// The camera for the whole run: a 3/4 elevated view that fits the union of the rest bounds and
 /// every frame's main bounds (the heaviest fragments, so that flying dust does not shrink the
 /// object to a speck), or its whole bounds for runs that did not record main bounds.
-fn frame_view(run: &RunFile, width: u32, height: u32) -> Result<View> {
+fn frame_view(run: &RunFile, width: u32, height: u32, aim: Aim) -> Result<View> {
     let boxes: Vec<Bounds> = run
         .rest_bounds
         .iter()
@@ -326,7 +379,7 @@ fn frame_view(run: &RunFile, width: u32, height: u32) -> Result<View> {
             b.max[k] = b.max[k].max(other.max[k]);
         }
     }
-    let mut view = view_of(b, run.up, f64::from(width) / f64::from(height));
+    let mut view = view_of(b, run.up, f64::from(width) / f64::from(height), aim);
     // The backdrop goes below everything any frame holds, debris that left the framed bounds
     // included (the wall's exit plume falls below the slab), so that it hides no fragment.
     for full in run.frames.iter().filter_map(|f| f.bounds.as_ref()) {
@@ -337,8 +390,9 @@ fn frame_view(run: &RunFile, width: u32, height: u32) -> Result<View> {
     Ok(view)
 }
 
-/// Places the camera so the 8 corners of `b` fall inside [`FILL`] of the picture.
-fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
+/// Places the camera at `aim`'s azimuth and elevation so the 8 corners of `b` fall inside
+/// [`FILL`] of the picture, then `aim.zoom` times closer.
+fn view_of(b: Bounds, up: [f64; 3], aspect: f64, aim: Aim) -> View {
     let up = scale(up, 1.0 / norm(up));
     // Horizontal axes: the data axis least aligned with up, made perpendicular to it.
     let axis = (0..3)
@@ -348,7 +402,7 @@ fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
     e1[axis] = 1.0;
     let e1 = normalized(sub(e1, scale(up, dot(e1, up))));
     let e2 = cross(up, e1);
-    let to_camera = direction(up, e1, e2, CAMERA_AZIMUTH_DEG, CAMERA_ELEVATION_DEG);
+    let to_camera = direction(up, e1, e2, aim.azimuth, aim.elevation);
     let forward = scale(to_camera, -1.0);
     let right = normalized(cross(forward, up));
     let cam_up = cross(right, forward);
@@ -367,7 +421,7 @@ fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
         lowest = lowest.min(dot(p, up));
     }
     View {
-        location: add(target, scale(to_camera, distance)),
+        location: add(target, scale(to_camera, distance / aim.zoom)),
         target,
         up,
         e1,
@@ -375,6 +429,8 @@ fn view_of(b: Bounds, up: [f64; 3], aspect: f64) -> View {
         extent,
         lowest,
         aspect,
+        azimuth: aim.azimuth,
+        elevation: aim.elevation,
     }
 }
 
@@ -535,8 +591,10 @@ fn scene_text(
         pov(view.target)
     );
     let far = view.extent * 20.0;
-    let key = light_dir(view, 30.0, 55.0);
-    let fill = light_dir(view, -40.0, 20.0);
+    // Seen from beneath, the lights come from beneath too.
+    let side = if view.elevation < 0.0 { -1.0 } else { 1.0 };
+    let key = light_dir(view, 30.0, side * 55.0);
+    let fill = light_dir(view, -40.0, side * 20.0);
     let _ = writeln!(
         w,
         "light_source {{ {} color rgb 1.0 }}\nlight_source {{ {} color rgb 0.35 shadowless }}",
@@ -548,14 +606,22 @@ fn scene_text(
     let checker = nice_step(view.extent / 4.0);
     for g in &run.grounds {
         let n = normalized(g.normal);
+        // A camera on the ground's back side sees through it: a faint checker that casts no
+        // shadow.
+        let behind = dot(sub(view.location, g.point), n) < 0.0;
+        let (see_through, shadow) = if behind {
+            (" transmit 0.8", " no_shadow")
+        } else {
+            ("", "")
+        };
         let _ = writeln!(
             w,
-            "plane {{ {}, {} texture {{ pigment {{ checker rgb <0.50, 0.50, 0.47> rgb <0.38, 0.38, 0.36> scale {checker} }} finish {{ ambient 0.1 diffuse 0.8 }} }} }}",
+            "plane {{ {}, {} texture {{ pigment {{ checker rgb <0.50, 0.50, 0.47>{see_through} rgb <0.38, 0.38, 0.36>{see_through} scale {checker} }} finish {{ ambient 0.1 diffuse 0.8 }} }}{shadow} }}",
             pov(n),
             dot(n, g.point)
         );
     }
-    if run.grounds.is_empty() {
+    if run.grounds.is_empty() && view.elevation >= 0.0 {
         // No ground in the run: a plain floor below the lowest point all frames reach, for
         // shadows and a horizon. Nothing touches it.
         let _ = writeln!(
@@ -595,7 +661,7 @@ fn light_dir(view: &View, azimuth_from_camera: f64, elevation: f64) -> [f64; 3] 
         view.up,
         view.e1,
         view.e2,
-        CAMERA_AZIMUTH_DEG - azimuth_from_camera,
+        view.azimuth - azimuth_from_camera,
         elevation,
     )
 }
@@ -752,7 +818,7 @@ mod tests {
         };
         for up in [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 1.0, 1.0]] {
             for aspect in [4.0 / 3.0, 0.5] {
-                let v = view_of(b, up, aspect);
+                let v = view_of(b, up, aspect, Aim::default());
                 let forward = normalized(sub(v.target, v.location));
                 let right = normalized(cross(forward, v.up));
                 let cam_up = cross(right, forward);
@@ -776,9 +842,49 @@ mod tests {
             min: [0.0; 3],
             max: [1.0; 3],
         };
-        let v = view_of(b, [0.0, 0.0, 1.0], 4.0 / 3.0);
+        let v = view_of(b, [0.0, 0.0, 1.0], 4.0 / 3.0, Aim::default());
         assert!(v.location[0] > 1.0 && v.location[1] < 0.0 && v.location[2] > 1.0);
         assert_eq!(pov([1.0, 2.0, 3.0]), "<1, 3, 2>");
+    }
+
+    /// `--zoom 2` halves the camera's distance to what it looks at; a negative elevation puts
+    /// it below, at that angle; the azimuth turns it round the up axis.
+    #[test]
+    fn aim_moves_the_camera() {
+        let b = Bounds {
+            min: [0.0; 3],
+            max: [1.0; 3],
+        };
+        let up = [0.0, 0.0, 1.0];
+        let base = view_of(b, up, 4.0 / 3.0, Aim::default());
+        let zoomed = view_of(
+            b,
+            up,
+            4.0 / 3.0,
+            Aim {
+                zoom: 2.0,
+                ..Aim::default()
+            },
+        );
+        let dist = |v: &View| norm(sub(v.location, v.target));
+        assert!((dist(&zoomed) - 0.5 * dist(&base)).abs() < 1e-12 * dist(&base));
+        let below = view_of(
+            b,
+            up,
+            4.0 / 3.0,
+            Aim {
+                elevation: -30.0,
+                azimuth: 140.0,
+                zoom: 1.0,
+            },
+        );
+        let rel = normalized(sub(below.location, below.target));
+        assert!(
+            (rel[2] - (-30f64).to_radians().sin()).abs() < 1e-12,
+            "{rel:?}"
+        );
+        // Azimuth 140 degrees from +x towards -y: x < 0, y < 0.
+        assert!(rel[0] < 0.0 && rel[1] < 0.0, "{rel:?}");
     }
 
     #[test]

@@ -344,6 +344,13 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
             None => String::new(),
         }
     );
+    if s.collider_seconds > 0.0 {
+        eprintln!(
+            "contact with grounds and balls: {:.2} s ({:.1}% of stepping)",
+            s.collider_seconds,
+            100.0 * s.collider_seconds / stepping
+        );
+    }
     eprintln!(
         "{} frames in {} (stepping {:.2} s, output {:.2} s)",
         s.frames_written,

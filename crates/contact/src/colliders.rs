@@ -4,7 +4,7 @@ use crate::desc::{BallDesc, BallMotion, GroundDesc};
 use crate::error::ContactError;
 use crate::implicit::ImplicitState;
 use crate::kernel::{scale_of, Coeffs};
-use crate::math::{dot, from_parry, norm, scale, sub, to_parry};
+use crate::math::{add, dot, from_parry, norm, scale, sub, to_parry};
 use crate::params::ContactParams;
 use crate::step::Scratch;
 use crate::Vec3;
@@ -334,6 +334,15 @@ impl Colliders {
         })
     }
 
+    /// The penalty stiffnesses of every ground and ball summed (N/m, before any per-particle
+    /// scale): the most a particle touching all of them at once is held by, so
+    /// `stiffness_sum / m` bounds what contact adds to a particle of mass `m`'s squared
+    /// frequency.
+    pub fn stiffness_sum(&self) -> f64 {
+        self.grounds.iter().map(|g| g.coeffs.k).sum::<f64>()
+            + self.balls.iter().map(|b| b.coeffs.k).sum::<f64>()
+    }
+
     /// Gravity acting on dynamic balls (m/s^2).
     pub fn gravity(&self) -> Vec3 {
         self.gravity
@@ -353,6 +362,45 @@ impl Colliders {
             .iter()
             .filter_map(|b| b.mass.map(|m| -m * dot(self.gravity, b.center())))
             .sum()
+    }
+
+    /// The deepest penetration (m, 0 when clear) of a sphere of `radius` (m) at `p` into any
+    /// ground or ball.
+    pub fn penetration(&self, p: Vec3, radius: f64) -> f64 {
+        let grounds = self
+            .grounds
+            .iter()
+            .map(|g| radius - dot(sub(p, g.point()), g.normal));
+        let balls = self
+            .balls
+            .iter()
+            .map(|b| radius + b.shape.radius - norm(sub(p, b.center())));
+        grounds.chain(balls).fold(0.0, f64::max)
+    }
+
+    /// `p` (m) moved along each collider's normal so that a sphere of `radius` (m) there
+    /// penetrates no ground or ball by more than `depth` (m, >= 0), each in turn (grounds
+    /// first). For a point a mesh edit puts inside a collider (a new vertex on a chord of a
+    /// surface wrapped round a ball), which the penalty would shoot out with the energy of
+    /// its overlap.
+    pub fn push_out(&self, p: Vec3, radius: f64, depth: f64) -> Vec3 {
+        let mut p = p;
+        for g in &self.grounds {
+            let d = radius - dot(sub(p, g.point()), g.normal);
+            if d > depth {
+                p = add(p, scale(g.normal, d - depth));
+            }
+        }
+        for b in &self.balls {
+            let c = b.center();
+            let off = sub(p, c);
+            let dist = norm(off);
+            let reach = radius + b.shape.radius - depth;
+            if dist < reach && dist > 0.0 {
+                p = add(c, scale(off, reach / dist));
+            }
+        }
+        p
     }
 
     /// Elastic energy (J) stored in the penalty springs: `k d^2 / 2` over every penetrating

@@ -238,3 +238,33 @@ fn balls_inside_a_closed_cube_surface() {
     );
     assert!(col.balls_inside_surface(&v, &[]).is_err());
 }
+
+/// `penetration` is the deepest overlap of a sphere with any collider, `push_out` moves the
+/// sphere along each collider's normal until it overlaps by no more than the depth allowed,
+/// and the stiffnesses sum over every collider.
+#[test]
+fn penetration_push_out_and_stiffness_sum() {
+    let c = Colliders::new(
+        vec![ground(0.0)],
+        vec![ball([0.0, 0.0, 2.0], 1.0, STILL)],
+        [0.0; 3],
+    )
+    .unwrap();
+    // 0.05 above the ground with radius 0.1: 0.05 into it, clear of the ball.
+    let low = [0.3, 0.0, 0.05];
+    assert!((c.penetration(low, 0.1) - 0.05).abs() < 1e-15);
+    let out = c.push_out(low, 0.1, 0.0);
+    assert!((out[2] - 0.1).abs() < 1e-15 && out[0] == 0.3, "{out:?}");
+    assert!(c.penetration(out, 0.1).abs() < 1e-15);
+    // Half a radius inside the ball, along x from its centre: 0.6 deep; allowed 0.2.
+    let inside = [0.5, 0.0, 2.0];
+    assert!((c.penetration(inside, 0.1) - 0.6).abs() < 1e-15);
+    let out = c.push_out(inside, 0.1, 0.2);
+    assert!((out[0] - 0.9).abs() < 1e-15 && out[2] == 2.0, "{out:?}");
+    assert!((c.penetration(out, 0.1) - 0.2).abs() < 1e-15);
+    // Within the allowance nothing moves; clear points stay.
+    assert_eq!(c.push_out(inside, 0.1, 0.7), inside);
+    assert_eq!(c.push_out([5.0, 5.0, 5.0], 0.1, 0.0), [5.0, 5.0, 5.0]);
+    assert_eq!(c.penetration([5.0, 5.0, 5.0], 0.1), 0.0);
+    assert!((c.stiffness_sum() - 2.0 * p().stiffness).abs() <= 1e-9 * p().stiffness);
+}

@@ -42,11 +42,11 @@ pub struct ShellFracture {
     /// instead (dimensionless, in [0, 0.5); the tests and benchmarks use 0.25; 0 never
     /// budges).
     pub budge: f64,
-    /// Share of the stress across a new crack that the triangles beside it give up into their
-    /// plastic offsets (in [0, 1]; 1, as the tests and benchmarks use: a free edge carries
-    /// none): the paper's
-    /// absorption of elastic strain at the crack, which takes the broken triangles' energy
-    /// and keeps them from breaking again at once.
+    /// Share of the membrane stress across a new crack that the triangles beside it give up
+    /// into their plastic offsets (in [0, 1]; 1, as the tests and benchmarks use: a free edge
+    /// carries none): the paper's absorption of elastic strain at the crack, which takes the
+    /// broken triangles' energy and keeps them from breaking again at once. Bending is not
+    /// released (see docs/DECISIONS.md, "Release").
     pub release: f64,
 }
 
@@ -582,19 +582,26 @@ impl ShellModel {
         }
         // A budge changes the strains of the triangles around the vertex; the plastic offsets
         // take the change, so their elastic strain coordinates stay as they were.
-        // Then the triangles beside the new cracks lose `release` of the stress across the
-        // crack (the paper's absorption of elastic strain at the crack, limited to what a
-        // free edge cannot carry): the energy that broke them goes, the stress along the
-        // crack stays, and they do not break again at once on the strain they had.
+        // Then the triangles beside the new cracks lose `release` of the membrane stress
+        // across the crack (the paper's absorption of elastic strain at the crack, limited to
+        // what a free edge cannot carry): the energy that broke them goes, the stress along the
+        // crack stays, and they do not break again at once on the strain they had. Their
+        // bending offsets are left alone: taking the curvature at a kink as the rest shape
+        // made the small triangles beside cracks run away (docs/DECISIONS.md, "Release").
         let release = self.fracture.as_ref().map_or(0.0, |f| f.params.release);
         if !absorb.is_empty() || (release > 0.0 && !released.is_empty()) {
             self.edge_pass(x);
             let fe = self.mesh.face_edges().to_vec();
+            let edges = self.mesh.edges().to_vec();
             if let Some(pl) = &mut self.plastic {
                 for &f in &absorb {
                     for (k, &e) in fe[f].iter().enumerate() {
                         pl.s[f][k] = self.edge_work[e as usize].s - elastic[f].0[k];
-                        pl.phi[f][k] = self.edge_work[e as usize].dphi - elastic[f].1[k];
+                        pl.phi[f][k] = if edges[e as usize].is_boundary() {
+                            0.0
+                        } else {
+                            self.edge_work[e as usize].dphi - elastic[f].1[k]
+                        };
                     }
                 }
                 let nu = self.material.poisson;
@@ -604,19 +611,15 @@ impl ShellModel {
                     let r = &self.faces[f];
                     let dir = in_plane(t, along);
                     let s: [f64; 3] = fe[f].map(|e| self.edge_work[e as usize].s);
-                    let d: [f64; 3] = fe[f].map(|e| self.edge_work[e as usize].dphi);
                     let es = [s[0] - pl.s[f][0], s[1] - pl.s[f][1], s[2] - pl.s[f][2]];
-                    let ed = [
-                        d[0] - pl.phi[f][0],
-                        d[1] - pl.phi[f][1],
-                        d[2] - pl.phi[f][2],
-                    ];
-                    let keep_m = free_edge(combine(&r.m, es), dir, nu);
-                    let keep_c = free_edge(combine(&r.n, ed), dir, nu);
-                    let (cm, cc) = (coordinates(&r.m, keep_m), coordinates(&r.n, keep_c));
+                    let keep = coordinates(&r.m, free_edge(combine(&r.m, es), dir, nu));
                     for k in 0..3 {
-                        pl.s[f][k] += release * (es[k] - cm[k]);
-                        pl.phi[f][k] += release * (ed[k] - cc[k]);
+                        pl.s[f][k] += release * (es[k] - keep[k]);
+                        // A boundary edge (the new crack's among them) bends freely: no
+                        // bending offset there.
+                        if edges[fe[f][k] as usize].is_boundary() {
+                            pl.phi[f][k] = 0.0;
+                        }
                     }
                 }
             }
@@ -641,13 +644,15 @@ fn in_plane(p: [Vec3; 3], d: Vec3) -> [f64; 2] {
     }
 }
 
-/// The strain `[xx, yy, xy]` left when a free edge along unit `t` takes the stress across it
-/// (plane stress, Poisson's ratio `nu`): only the stress along the edge stays,
-/// `sigma_tt = Y (e_tt + nu e_nn) / (1 - nu^2)`, whose strain is `sigma_tt / Y (t t - nu n n)`.
+/// The strain `[xx, yy, xy]` left when a free edge along unit `t` sheds the stress across it
+/// (plane stress, Poisson's ratio `nu`): the strain along the edge `e_tt` stays (its
+/// neighbours along the crack hold it), and the rest takes the values that carry no traction
+/// across, `e_nn = -nu e_tt` and `e_tn = 0`, so `e_tt (t t - nu n n)`: the least membrane energy
+/// with that `e_tt`, so a release never adds energy. (Keeping the stress along the edge instead
+/// can add energy: releasing again and again, a triangle beside a crack pumped it up.)
 fn free_edge(e: [f64; 3], t: [f64; 2], nu: f64) -> [f64; 3] {
     let n = [-t[1], t[0]];
-    let along = |a: [f64; 2]| a[0] * a[0] * e[0] + a[1] * a[1] * e[1] + 2.0 * a[0] * a[1] * e[2];
-    let s = (along(t) + nu * along(n)) / (1.0 - nu * nu);
+    let s = t[0] * t[0] * e[0] + t[1] * t[1] * e[1] + 2.0 * t[0] * t[1] * e[2];
     [
         s * (t[0] * t[0] - nu * n[0] * n[0]),
         s * (t[1] * t[1] - nu * n[1] * n[1]),

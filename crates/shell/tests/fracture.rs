@@ -148,9 +148,11 @@ fn fracture_keeps_every_triangle_above_the_angle_bound_and_the_mass() {
     // The notched sheet pulled for 3,000 steps, past its first break (at step 1,542):
     // rounds of splits and budges, the pieces flung apart. No triangle may ever have an angle
     // under perifrac_shell::fracture::MIN_ANGLE (15 deg; the sheet starts at 45), the mass
-    // must stay (splits and budges move mass between vertices only: measured 1.4e-16), and
-    // the cracks stay within 4 cells of the notch line (measured 3.25 to 6.5 cm): the sheet
-    // parts at the notch and chips along the crack, it does not break elsewhere.
+    // must stay (splits and budges move mass between vertices only: measured 2.8e-16), and
+    // the cracks stay in the middle half of the sheet, away from the grips at 0 and 10 cm
+    // (measured 3.0 to 7.3 cm; 3.25 to 6.5 cm while the release kept the stress along a
+    // crack rather than the strain, which released less and chipped less): the sheet parts
+    // at the notch and chips along the crack, it does not break at the grips.
     for budge in [0.0, 0.25] {
         let mut shell = notched_sheet(budge, 0.05, 2e4);
         let mut dt = 0.5 * shell.stable_step().unwrap();
@@ -190,7 +192,7 @@ fn fracture_keeps_every_triangle_above_the_angle_bound_and_the_mass() {
         assert!(events > 0);
         assert!(worst >= fracture::MIN_ANGLE - 1e-9, "{worst}");
         assert!(((mass - mass0) / mass0).abs() < 1e-12);
-        assert!(band.0 > 0.03 && band.1 < 0.07, "{band:?}");
+        assert!(band.0 > 0.025 && band.1 < 0.075, "{band:?}");
     }
 }
 

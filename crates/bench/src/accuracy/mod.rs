@@ -1,10 +1,11 @@
 //! `perifrac bench accuracy`: peridynamic runs against references, over resolution and
-//! horizon sweeps. Every case shares geometry, material, loads and boundary conditions with its
+//! horizon sweeps, and the thin-shell model against plate and membrane answers. Every case shares geometry, material, loads and boundary conditions with its
 //! reference, and every reference is shown converged in its own table.
 
 mod cantilever;
 mod motion;
 mod motion_runs;
+mod shells;
 mod waves;
 mod xu;
 mod xu_static;
@@ -21,6 +22,7 @@ use crate::{BenchError, Effort};
 
 pub use cantilever::{cantilever, EULER_BERNOULLI, SCIKIT_FEM, TIMOSHENKO};
 pub use motion::{swing, twist};
+pub use shells::{navier_centre, shell_membrane, shell_plate, shell_strip};
 pub use waves::{moduli, wave_speed};
 pub use xu::{xu_bend, xu_twist};
 
@@ -129,7 +131,7 @@ pub struct CaseReport {
 }
 
 /// The accuracy cases by name, in report order.
-pub const CASES: [&str; 7] = [
+pub const CASES: [&str; 10] = [
     "cantilever",
     "swing",
     "twist",
@@ -137,6 +139,9 @@ pub const CASES: [&str; 7] = [
     "wave_speed",
     "xu_bend",
     "xu_twist",
+    "shell_strip",
+    "shell_plate",
+    "shell_membrane",
 ];
 
 /// Runs the accuracy cases at `effort` (those named in `only`, or all), telling `progress`
@@ -174,6 +179,9 @@ pub fn run_case(
         "wave_speed" => wave_speed(effort, progress),
         "xu_bend" => xu_bend(effort, progress),
         "xu_twist" => xu_twist(effort, progress),
+        "shell_strip" => shell_strip(effort, progress),
+        "shell_plate" => shell_plate(effort, progress),
+        "shell_membrane" => shell_membrane(effort, progress),
         other => Err(BenchError::UnknownCase(other.into())),
     }
 }

@@ -78,8 +78,8 @@ pub struct ShellFrameJson {
     pub balls: Vec<BallJson>,
     /// Bounds of the surface (m).
     pub bounds: Bounds,
-    /// Bounds of the largest pieces that together hold [`crate::output::MAIN_MASS_SHARE`] of
-    /// the triangles (m): flying chips do not shrink the picture.
+    /// Bounds of the largest pieces by area that together hold
+    /// [`crate::output::MAIN_MASS_SHARE`] of the area (m): flying chips do not shrink the picture.
     pub main_bounds: Bounds,
     /// Connected pieces.
     pub fragments: usize,
@@ -115,6 +115,8 @@ pub struct ShellSummary {
     pub broken_triangles: usize,
     /// Pieces at the end.
     pub fragments: usize,
+    /// Triangles at the end (splits add them).
+    pub triangles: usize,
     /// Triangles that have yielded, at the end.
     pub yielded: usize,
     /// Sub-steps taken (the steps, or more where steps were cut or searched).
@@ -136,6 +138,8 @@ pub struct ShellSummary {
     /// Self contact, when on: wall time (s, discarded trials included) and candidate-list
     /// builds.
     pub self_contact: Option<(f64, u64)>,
+    /// Wall time (s) in the contact pass with grounds and balls, discarded trials included.
+    pub collider_seconds: f64,
 }
 
 /// Runs a shell scene to the end, writing frames into `dir` (cleared of an earlier run's
@@ -208,6 +212,7 @@ pub fn run_shell(
         dt: setup.info.dt,
         broken_triangles: setup.shell.stats().events.len(),
         fragments,
+        triangles: s.model().mesh().triangles().len(),
         yielded: s.model().yielded(),
         substeps: setup.shell.stats().substeps,
         rejected: setup.shell.stats().rejected,
@@ -221,6 +226,7 @@ pub fn run_shell(
             let st = s.self_contact_stats();
             (st.total_seconds, st.builds)
         }),
+        collider_seconds: s.collider_seconds(),
     })
 }
 
@@ -231,26 +237,28 @@ fn evaluations(setup: &ShellSetup) -> u64 {
 }
 
 /// One step of the scene. With the event search, the search covers it. Without, it is cut into
-/// `substeps` equal parts, fracture checked after each; when triangles broke, the stable step
-/// is measured again on the new mesh and `substeps` raised so each part stays within the
-/// scene's share of it (splits make triangles smaller, and a step that was stable before can
-/// run away after).
+/// parts of `dt / substeps`, fracture checked after each; when triangles broke, the stable step
+/// is measured again on the new mesh (lighter vertices, smaller triangles) and `substeps`
+/// raised so the rest of the step, and the steps after, keep within the scene's share of it (a
+/// part that was stable before a split can run away after it).
 fn advance(setup: &mut ShellSetup, substeps: &mut u64) -> Result<(), perifrac_shell::ShellError> {
     let dt = setup.info.dt;
     if setup.info.event_levels > 0 {
         return setup.shell.advance(dt);
     }
-    let before = setup.shell.stats().events.len();
-    for _ in 0..*substeps {
-        setup.shell.advance(dt / *substeps as f64)?;
-    }
-    if setup.shell.stats().events.len() > before {
-        let omega = 2.0 / setup.shell.shell_mut().stable_step()?;
-        let limit = 2.0 / (omega * omega + setup.info.collider_omega2).sqrt();
-        let wanted = setup.info.safety * limit;
-        let needed = (dt / wanted).ceil();
-        if needed.is_finite() && needed as u64 > *substeps {
-            *substeps = needed as u64;
+    let mut done = 0.0;
+    while done < dt * (1.0 - 1e-12) {
+        let h = (dt / *substeps as f64).min(dt - done);
+        let before = setup.shell.stats().events.len();
+        setup.shell.advance(h)?;
+        done += h;
+        if setup.shell.stats().events.len() > before {
+            let omega = 2.0 / setup.shell.shell_mut().stable_step()?;
+            let limit = 2.0 / (omega * omega + setup.info.ball_omega2).sqrt();
+            let needed = (dt / (setup.info.safety * limit)).ceil();
+            if needed.is_finite() && needed as u64 > *substeps {
+                *substeps = needed as u64;
+            }
         }
     }
     Ok(())
@@ -436,27 +444,35 @@ impl ShellWriter {
     }
 }
 
-/// Bounds (m) of the pieces with the most triangles that together hold
-/// [`crate::output::MAIN_MASS_SHARE`] of them (a shell's mass goes with its area, and its
-/// triangles are of about one size).
+/// Bounds (m) of the largest pieces by area that together hold
+/// [`crate::output::MAIN_MASS_SHARE`] of the shell's area (its mass goes with its area; by
+/// triangle count, the chips fracture cuts small would weigh as much as whole triangles).
 fn main_bounds(x: &[[f64; 3]], triangles: &[[u32; 3]], piece: &[u32]) -> Bounds {
     let pieces = piece.iter().max().map_or(0, |p| *p as usize + 1);
-    let mut count = vec![0usize; pieces];
-    for &p in piece {
-        count[p as usize] += 1;
+    let mut area = vec![0.0f64; pieces];
+    for (t, &p) in triangles.iter().zip(piece) {
+        let [a, b, c] = t.map(|i| x[i as usize]);
+        let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [
+            ab[1] * ac[2] - ab[2] * ac[1],
+            ab[2] * ac[0] - ab[0] * ac[2],
+            ab[0] * ac[1] - ab[1] * ac[0],
+        ];
+        area[p as usize] += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
     }
     let mut order: Vec<usize> = (0..pieces).collect();
-    // most triangles first; ties by id, so the choice is deterministic
-    order.sort_by(|&a, &b| count[b].cmp(&count[a]).then(a.cmp(&b)));
+    // largest first; ties by id, so the choice is deterministic
+    order.sort_by(|&a, &b| area[b].total_cmp(&area[a]).then(a.cmp(&b)));
     let mut kept = vec![false; pieces];
-    let mut sum = 0usize;
-    let want = crate::output::MAIN_MASS_SHARE * piece.len() as f64;
+    let mut sum = 0.0;
+    let want = crate::output::MAIN_MASS_SHARE * area.iter().sum::<f64>();
     for p in order {
-        if sum as f64 >= want {
+        if sum >= want {
             break;
         }
         kept[p] = true;
-        sum += count[p];
+        sum += area[p];
     }
     let points: Vec<[f64; 3]> = triangles
         .iter()

@@ -132,8 +132,11 @@ pub struct ShellSetupInfo {
     pub dt: f64,
     /// The measured stable limit (s): elastic forces with the colliders' stiffness.
     pub dt_limit: f64,
-    /// What the colliders add to the squared highest frequency (1/s^2).
-    pub collider_omega2: f64,
+    /// What the dynamic balls add to the squared highest frequency (1/s^2): the vertices a
+    /// ball can hold at once, times their stiffness, over its mass. (What contact adds to a
+    /// vertex's frequency is in the shell's own stable step, which follows the masses fracture
+    /// changes.)
+    pub ball_omega2: f64,
     /// The share of the stable limit steps keep to (`simulation.safety`); without the event
     /// search, steps are cut into parts when fracture lowers the limit.
     pub safety: f64,
@@ -327,7 +330,7 @@ impl ShellSetup {
         let radius = 0.5 * thickness;
         let masses = shell.model().masses().to_vec();
         let scale = vec![1.0; masses.len()];
-        let collider_omega2 = match build_colliders(
+        let ball_omega2 = match build_colliders(
             &ctx,
             &f.ground,
             &f.ball,
@@ -349,7 +352,7 @@ impl ShellSetup {
                 shell
                     .set_colliders(colliders, radius)
                     .map_err(|e| ctx.err("ball/ground", e.to_string()))?;
-                stiffness.collider_omega2.max(stiffness.ball_omega2)
+                stiffness.ball_omega2
             }
             None => 0.0,
         };
@@ -377,11 +380,11 @@ impl ShellSetup {
                     .map_err(|e| ctx.err("simulation.self_contact", e.to_string()))?;
             }
         }
-        let elastic_limit = shell
+        let shell_limit = shell
             .stable_step()
             .map_err(|e| ctx.err("shell", format!("no stable step: {e}")))?;
-        let omega = 2.0 / elastic_limit;
-        let dt_limit = 2.0 / (omega * omega + collider_omega2).sqrt();
+        let omega = 2.0 / shell_limit;
+        let dt_limit = 2.0 / (omega * omega + ball_omega2).sqrt();
         let wanted = match fixed {
             Some(dt) if dt > defaults::MAX_FIXED_FRACTION * dt_limit => {
                 return Err(ctx.err(
@@ -419,7 +422,7 @@ impl ShellSetup {
             dt,
             dt_limit,
             safety,
-            collider_omega2,
+            ball_omega2,
             event_levels: config.levels,
             up: up_from_gravity(gravity),
             rest_bounds: bounds(&rest),
