@@ -411,8 +411,13 @@ impl ExplicitShell {
             }
         }
         self.f.resize(self.x.len(), [0.0; 3]);
-        if let Some(sc) = &mut self.self_contact {
-            sc.invalidate();
+        // A round that only released stress beside cracks already there leaves the triangles
+        // and the rest positions as they were: the self-contact list stays good (rebuilding
+        // it then was most of the 1e-4 punctured sheet's 10,584 list builds).
+        if !(report.events.is_empty() && report.added.is_empty()) {
+            if let Some(sc) = &mut self.self_contact {
+                sc.invalidate();
+            }
         }
         self.internal_forces()?;
         Ok(report)

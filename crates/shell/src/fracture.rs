@@ -564,21 +564,25 @@ impl ShellModel {
                 budged: false,
             });
         }
-        open_cracks(&mut edit, x, v);
-        report.added = edit.added.clone();
         report.changed = true;
-        let Edit {
-            rest,
-            tris,
-            ps,
-            pphi,
-            crack,
-            ..
-        } = edit;
-        let mesh = ShellMesh::new(rest, tris)?;
-        self.rebuild(mesh, Some((ps, pphi)))?;
-        if let Some(fs) = &mut self.fracture {
-            fs.crack = crack;
+        // A round that only releases stress beside cracks already there (no split, no budge)
+        // leaves the mesh as it is: only the plastic offsets change, below.
+        if !report.events.is_empty() {
+            open_cracks(&mut edit, x, v);
+            report.added = edit.added.clone();
+            let Edit {
+                rest,
+                tris,
+                ps,
+                pphi,
+                crack,
+                ..
+            } = edit;
+            let mesh = ShellMesh::new(rest, tris)?;
+            self.rebuild(mesh, Some((ps, pphi)))?;
+            if let Some(fs) = &mut self.fracture {
+                fs.crack = crack;
+            }
         }
         // A budge changes the strains of the triangles around the vertex; the plastic offsets
         // take the change, so their elastic strain coordinates stay as they were.
