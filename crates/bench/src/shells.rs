@@ -16,7 +16,8 @@ use crate::{BenchError, Effort};
 /// The light bulb of the paper's Figure 1 (`data/scenes/shell_bulb.toml`).
 const BULB: &str = include_str!("../../../data/scenes/shell_bulb.toml");
 
-fn shell_error(case: &str) -> impl Fn(ShellError) -> BenchError + '_ {
+/// A shell error of `case` as a bench error.
+pub(crate) fn shell_error(case: &str) -> impl Fn(ShellError) -> BenchError + '_ {
     move |cause| BenchError::Scene {
         case: case.into(),
         message: cause.to_string(),

@@ -371,21 +371,19 @@ impl ExplicitShell {
     /// added take their sources' pins (a point on an edge is pinned when both ends are), and
     /// the forces (elastic and self-contact) are evaluated on the new mesh.
     pub fn fracture(&mut self) -> Result<FractureReport, ShellError> {
+        // Most calls find nothing over its threshold: one pass, and back.
+        if self.model.worst_fracture_ratio(&self.x)? <= 1.0 {
+            return Ok(FractureReport::default());
+        }
         // With colliders, each vertex's penetration before the round: a vertex the round puts
         // on a chord of the surface wrapped round a ball (or budges onto one) goes no deeper
         // than it, or its sources, were (the penalty would shoot it out with its overlap's
         // energy: a punctured sheet's chips left at 260 m/s).
-        let touching = match &self.colliders {
-            Some(_) => self.model.worst_fracture_ratio(&self.x)? > 1.0,
-            None => false,
-        };
-        if touching {
-            if let Some(c) = &self.colliders {
-                let r = self.radii.first().copied().unwrap_or(0.0);
-                self.depths.clear();
-                self.depths
-                    .extend(self.x.iter().map(|p| c.penetration(*p, r)));
-            }
+        if let Some(c) = &self.colliders {
+            let r = self.radii.first().copied().unwrap_or(0.0);
+            self.depths.clear();
+            self.depths
+                .extend(self.x.iter().map(|p| c.penetration(*p, r)));
         }
         let report = self.model.fracture(&mut self.x, &mut self.v)?;
         if !report.changed {
@@ -398,7 +396,7 @@ impl ExplicitShell {
                 self.radii.push(r);
             }
         }
-        if let (true, Some(c)) = (touching, &self.colliders) {
+        if let Some(c) = &self.colliders {
             let r = self.radii.first().copied().unwrap_or(0.0);
             // A vertex added may come from one added before it in the same round: its
             // allowance is filled in first.

@@ -46,7 +46,7 @@ pub struct ShellFracture {
     /// into their plastic offsets (in [0, 1]; 1, as the tests and benchmarks use: a free edge
     /// carries none): the paper's absorption of elastic strain at the crack, which takes the
     /// broken triangles' energy and keeps them from breaking again at once. Bending is not
-    /// released (see docs/DECISIONS.md, "Release").
+    /// released (see docs/DECISIONS.md, "Release at the crack").
     pub release: f64,
 }
 
@@ -588,15 +588,15 @@ impl ShellModel {
         // take the change, so their elastic strain coordinates stay as they were.
         // Then the triangles beside the new cracks lose `release` of the membrane stress
         // across the crack (the paper's absorption of elastic strain at the crack, limited to
-        // what a free edge cannot carry): the energy that broke them goes, the stress along the
-        // crack stays, and they do not break again at once on the strain they had. Their
+        // what a free edge cannot carry): the energy that broke them goes, the strain along
+        // the crack stays, and they do not break again at once on the strain they had. Their
         // bending offsets are left alone: taking the curvature at a kink as the rest shape
-        // made the small triangles beside cracks run away (docs/DECISIONS.md, "Release").
+        // made the small triangles beside cracks run away (docs/DECISIONS.md, "Release at the
+        // crack").
         let release = self.fracture.as_ref().map_or(0.0, |f| f.params.release);
         if !absorb.is_empty() || (release > 0.0 && !released.is_empty()) {
             self.edge_pass(x);
-            let fe = self.mesh.face_edges().to_vec();
-            let edges = self.mesh.edges().to_vec();
+            let (fe, edges) = (self.mesh.face_edges(), self.mesh.edges());
             if let Some(pl) = &mut self.plastic {
                 for &f in &absorb {
                     for (k, &e) in fe[f].iter().enumerate() {

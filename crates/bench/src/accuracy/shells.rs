@@ -18,9 +18,10 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use perifrac_shell::{generate, ExplicitShell, ShellError, ShellMaterial, ShellMesh, ShellModel};
+use perifrac_shell::{generate, ExplicitShell, ShellMaterial, ShellMesh, ShellModel};
 
 use super::{table_and_plot, CaseReport, Run};
+use crate::shells::shell_error;
 use crate::table::Table;
 use crate::{BenchError, Effort};
 
@@ -33,13 +34,7 @@ const THICKNESS: f64 = 1e-3;
 /// The method's name in the tables.
 const METHOD: &str = "shell (Gingold)";
 
-fn shell_error(case: &str) -> impl Fn(ShellError) -> BenchError + '_ {
-    move |cause| BenchError::Scene {
-        case: case.into(),
-        message: cause.to_string(),
-    }
-}
-
+/// A surface-generation error of `case` as a bench error.
 fn mesh_error(case: &str) -> impl Fn(perifrac_shell::generate::GenerateError) -> BenchError + '_ {
     move |e| BenchError::Mesh {
         case: case.into(),

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
+use perifrac_physics::math::{cross, norm, sub};
 use serde::Serialize;
 
 use crate::error::SceneError;
@@ -452,14 +453,7 @@ fn main_bounds(x: &[[f64; 3]], triangles: &[[u32; 3]], piece: &[u32]) -> Bounds 
     let mut area = vec![0.0f64; pieces];
     for (t, &p) in triangles.iter().zip(piece) {
         let [a, b, c] = t.map(|i| x[i as usize]);
-        let ab = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let ac = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let n = [
-            ab[1] * ac[2] - ab[2] * ac[1],
-            ab[2] * ac[0] - ab[0] * ac[2],
-            ab[0] * ac[1] - ab[1] * ac[0],
-        ];
-        area[p as usize] += 0.5 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        area[p as usize] += 0.5 * norm(cross(sub(b, a), sub(c, a)));
     }
     let mut order: Vec<usize> = (0..pieces).collect();
     // largest first; ties by id, so the choice is deterministic
