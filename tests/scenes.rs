@@ -129,9 +129,11 @@ fn the_dropped_bunny_shatters_into_several_pieces() {
 /// Mean z displacement (m) of the particles in the top layer within 3 cm of the slab's centre
 /// (the impact point of the wall scenes), averaged over the last fifth of the run (a few
 /// periods of the damped ringing that is left), and its most negative value over the run.
-fn impact_point_dent(name: &str, cells: [usize; 3]) -> (f64, f64) {
+fn impact_point_dent(name: &str, cells: Option<[usize; 3]>) -> (f64, f64) {
     let mut scene = load(name);
-    scene.file.mesh.cells = Some(cells);
+    if cells.is_some() {
+        scene.file.mesh.cells = cells;
+    }
     let mut setup = Setup::new(&scene, None).unwrap();
     let rest = rest_positions(&setup);
     let top = rest.iter().map(|x| x[2]).fold(0.0, f64::max);
@@ -160,9 +162,12 @@ fn impact_point_dent(name: &str, cells: [usize; 3]) -> (f64, f64) {
 #[test]
 fn the_elastic_slab_recovers_and_the_plastic_slab_keeps_a_dent() {
     // 16 x 16 x 2 cells instead of 24 x 24 x 3 (a fifth of the work). At the files' own cells
-    // (release) the impact point ends at -0.4 mm (elastic, 0.5% of its deepest -77 mm) and
-    // -35 mm (plastic, 36% of its deepest -97 mm).
-    let cells = [16, 16, 2];
+    // (release, `impact_point_at_the_files_cells`) the impact point ends at -0.4 mm (elastic,
+    // 0.5% of its deepest -76 mm) and -17 mm (plastic, 19% of its deepest -90 mm); here at
+    // -0.1 mm of -81 mm and -16.3 mm of -94 mm (17%). (The plastic dent was 36% of the deepest
+    // point while surface particles, whose calibrated b_i is larger, yielded at about half the
+    // scene's yield strain; each particle now yields at it: docs/DECISIONS.md.)
+    let cells = Some([16, 16, 2]);
     let (elastic, elastic_deepest) = impact_point_dent("wall_elastic.toml", cells);
     let (plastic, plastic_deepest) = impact_point_dent("wall_plastic.toml", cells);
     eprintln!(
@@ -173,8 +178,29 @@ fn the_elastic_slab_recovers_and_the_plastic_slab_keeps_a_dent() {
     assert!(elastic_deepest < -0.03 && plastic_deepest < -0.03);
     // Elastic: back to within 10% of the deepest point (measured 0.5% at full resolution).
     assert!(elastic.abs() < 0.1 * elastic_deepest.abs(), "{elastic}");
-    // Plastic: a dent of more than 20% of the deepest point stays (measured 36%).
-    assert!(plastic < 0.2 * plastic_deepest, "{plastic}");
+    // Plastic: a dent of more than 10% of the deepest point stays (measured 17%), a hundred
+    // times the elastic slab's.
+    assert!(plastic < 0.1 * plastic_deepest, "{plastic}");
+}
+
+#[test]
+#[ignore = "minutes: the README's impact-point figures at the scene files' own cells"]
+fn impact_point_at_the_files_cells() {
+    for name in [
+        "wall_elastic.toml",
+        "wall_plastic.toml",
+        "wall_cap_10.toml",
+        "wall_cap_15.toml",
+        "wall_cap_20.toml",
+    ] {
+        let (end, deepest) = impact_point_dent(name, None);
+        eprintln!(
+            "{name}: impact point at {:.1} mm deepest, {:.1} mm at the end",
+            1e3 * deepest,
+            1e3 * end
+        );
+        assert!(deepest < 0.0);
+    }
 }
 
 #[test]

@@ -2,9 +2,9 @@
 //! (Chen's or Xu's, through [`PdMaterial`]), picking particles, fitting.
 
 use perifrac_physics::{
-    ChenMaterial, ChenModel, Curve, Discretization, Explicit, ExplicitConfig, ForceModel, Implicit,
-    ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel, Simulation, TimeStep, Vec3,
-    XuMaterial, XuModel, XuModuli, XuOptions,
+    ChenMaterial, ChenModel, ChenOptions, Curve, Discretization, Explicit, ExplicitConfig,
+    ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel,
+    Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
 };
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
@@ -32,6 +32,22 @@ impl PdMaterial for ChenMaterial {
 
     fn model(&self, disc: Discretization) -> Result<ChenModel, PhysicsError> {
         ChenModel::new(disc, std::slice::from_ref(self))
+    }
+}
+
+/// Chen's material with the fitted dilatation (`ChenOptions::fitted_dilatation`).
+#[derive(Debug, Clone)]
+pub(crate) struct FittedChen(pub ChenMaterial);
+
+impl PdMaterial for FittedChen {
+    type Model = ChenModel;
+
+    fn model(&self, disc: Discretization) -> Result<ChenModel, PhysicsError> {
+        let options = ChenOptions {
+            fitted_dilatation: true,
+            ..ChenOptions::default()
+        };
+        ChenModel::with_options(disc, std::slice::from_ref(&self.0), options)
     }
 }
 

@@ -70,6 +70,7 @@ fn material(p: MaterialPath) -> ChenMaterial {
         m.plasticity = Some(YieldParams {
             psi0: 1e30,
             gamma_ratio: 0.2,
+            from_strain: false,
         });
     }
     if p.fracture {

@@ -91,6 +91,18 @@ fn accuracy_rows_are_finite_and_refinement_helps_the_cantilever() {
     // 20x2x2 then 30x3x3 cells at k = 1.5: measured +8.3% then -3.4%.
     assert_eq!(pd.len(), 2);
     assert!(pd[1].error.abs() <= pd[0].error.abs(), "{pd:?}");
+    // With the fitted dilatation: measured +21.6% then +8.0%, soft and converging.
+    let fitted: Vec<_> = cantilever
+        .runs
+        .iter()
+        .filter(|r| r.method == "PD fitted")
+        .collect();
+    assert_eq!(fitted.len(), 2);
+    assert!(fitted[1].error.abs() < fitted[0].error.abs(), "{fitted:?}");
+    assert!(fitted.iter().all(|r| r.error > 0.0), "{fitted:?}");
+    // and the second table carries an order and a sideways share for every peridynamic row
+    let (_, convergence) = &cantilever.tables[0];
+    assert_eq!(convergence.rows.len(), 4);
     // The quadratic reference is within 1% of scikit-fem's converged answer already at 20
     // cells along (measured -0.52%), and linear tets lock (measured -49%).
     let p2 = cantilever

@@ -163,6 +163,24 @@ pub fn run(args: &RunArgs) -> Result<()> {
         info.times.model.as_secs_f64(),
         info.times.stable_step.as_secs_f64(),
     );
+    if let Some(c) = &info.correction {
+        let (d, b) = (c.dilatation, c.deviatoric);
+        eprintln!(
+            "correction of MODEL.md's constants: dilatation weights x{:.3} to x{:.3} (median \
+             {:.3}, 99% under {:.3} in magnitude), b x{:.3} to x{:.3} (median {:.3}, 99% under \
+             {:.3})",
+            d.min, d.max, d.median, d.p99, b.min, b.max, b.median, b.p99
+        );
+        use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};
+        if d.p99.max(b.p99) > CORRECTION_WARNING || d.max.max(b.max) > CORRECTION_WARNING_MAX {
+            eprintln!(
+                "warning: correction factors past {CORRECTION_WARNING} (1 in 100) or \
+                 {CORRECTION_WARNING_MAX} (any): some particles have lost most of their family \
+                 (tets much larger than the horizon, or parts one or two tets across); a finer \
+                 or more even mesh, or a larger horizon factor, gives them more bonds"
+            );
+        }
+    }
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let mut bar = Bar::new(interactive, interrupt_flag()?);
     let t0 = Instant::now();

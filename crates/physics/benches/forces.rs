@@ -66,6 +66,7 @@ fn main() {
     plastic.plasticity = Some(YieldParams {
         psi0: 0.5 * a_y * a_y,
         gamma_ratio: 0.05,
+        from_strain: false,
     });
     let mut brittle = steel.clone();
     brittle.fracture = Some(FractureParams {

@@ -54,9 +54,9 @@ pub use integrate::{
 };
 pub use loads::{AnchorMotion, Loads};
 pub use material::{
-    Basis, ChenMaterial, ChenModel, ChenOptions, Curve, ForceModel, FractureParams,
-    QuasiNewtonModel, XuAnisotropy, XuKernelShape, XuMaterial, XuModel, XuModuli, XuOptions,
-    YieldParams,
+    Basis, ChenMaterial, ChenModel, ChenOptions, Correction, Curve, ForceModel, FractureParams,
+    QuasiNewtonModel, Spread, XuAnisotropy, XuKernelShape, XuMaterial, XuModel, XuModuli,
+    XuOptions, YieldParams,
 };
 pub use math::{Real, Vec3};
 pub use particles::Discretization;

@@ -132,6 +132,7 @@ fn model_md_force_without_the_pressure_term_is_not_a_gradient() {
     let opts = ChenOptions {
         energy_consistent: false,
         calibrated: false,
+        fitted_dilatation: false,
     };
     let mut m = ChenModel::with_options(disc, &[steel()], opts).unwrap();
     let x = m.discretization().rest_positions().to_vec();

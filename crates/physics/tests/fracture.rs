@@ -216,6 +216,7 @@ fn ductile_check_matches_the_criterion_bond_by_bond() {
     material.plasticity = Some(YieldParams {
         psi0: 1e30,
         gamma_ratio: 0.2,
+        from_strain: false,
     });
     let model = ChenModel::new(disc.clone(), &[material]).unwrap();
     let fam = disc.family();

@@ -40,6 +40,7 @@ fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) 
 const MODEL_MD: ChenOptions = ChenOptions {
     energy_consistent: true,
     calibrated: false,
+    fitted_dilatation: false,
 };
 
 #[test]

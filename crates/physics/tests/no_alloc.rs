@@ -40,6 +40,7 @@ fn chen_paths() {
     steel.plasticity = Some(YieldParams {
         psi0: 1e30,
         gamma_ratio: 0.05,
+        from_strain: false,
     });
     steel.fracture = Some(FractureParams {
         s_crit: 1.0,

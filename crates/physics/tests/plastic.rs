@@ -24,6 +24,7 @@ fn plastic_model(gamma_y: f64, cap: f64, opts: ChenOptions) -> ChenModel {
     mat.plasticity = Some(YieldParams {
         psi0: 0.5 * a_y * a_y,
         gamma_ratio: cap,
+        from_strain: false,
     });
     ChenModel::with_options(disc, &[mat], opts).unwrap()
 }
@@ -89,9 +90,16 @@ fn return_map_puts_a_dev_on_the_yield_surface_and_respects_the_cap() {
 
 #[test]
 fn pure_hydrostatic_compression_does_not_yield() {
-    for (calibrated, expect_zero) in [(true, true), (false, false)] {
+    // (calibrated, fitted dilatation, no bond yields)
+    for (calibrated, fitted_dilatation, expect_zero) in [
+        (true, true, true),
+        (true, false, true),
+        (false, true, true),
+        (false, false, false),
+    ] {
         let opts = ChenOptions {
             calibrated,
+            fitted_dilatation,
             ..ChenOptions::default()
         };
         let mut m = plastic_model(0.002, 0.05, opts);
@@ -104,11 +112,13 @@ fn pure_hydrostatic_compression_does_not_yield() {
         let ep = m.plastic_extension().unwrap();
         let yielded = ep.iter().filter(|&&e| e != 0.0).count();
         eprintln!(
-            "calibrated {calibrated}: {yielded} of {} bonds yielded under pure pressure",
+            "calibrated {calibrated}, fitted {fitted_dilatation}: {yielded} of {} bonds \
+             yielded under pure pressure",
             ep.len()
         );
         if expect_zero {
-            // ed = e - theta r / 3 vanishes bond by bond (to rounding, ~1e-16 r)
+            // theta = 3 eps exactly (either correction), so ed = e - theta r / 3 vanishes
+            // bond by bond (to rounding, ~1e-16 r)
             assert_eq!(yielded, 0);
         } else {
             // MODEL.md's uniform c: surface families see theta < 3 eps and yield spuriously
@@ -172,4 +182,83 @@ fn sheared_past_yield_keeps_a_permanent_set() {
     // measured: plastic keeps 0.833 of the 2% shear; the elastic block springs back to ~1e-15
     assert!(plastic > 0.5);
     assert!(elastic.abs() < 0.05);
+}
+
+/// Bonds of particles `set` with a plastic extension after one force update.
+fn yielded_in(m: &ChenModel, set: &[usize]) -> usize {
+    let ep = m.plastic_extension().expect("plastic");
+    let fam = m.discretization().family();
+    set.iter()
+        .map(|&i| fam.range(i).filter(|&k| ep[k] != 0.0).count())
+        .sum()
+}
+
+#[test]
+fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
+    // A bar of 8 x 3 x 3 cells under the homogeneous strain of uniaxial tension (eps along x,
+    // -nu eps across). A bond along x has deviatoric strain (2/3)(1 + nu) eps, the largest of
+    // any direction, so with a yield strain eps_y (the scene's `yield_strain`, converted with
+    // MODEL.md's b and rescaled per particle) the first bonds yield at
+    // eps = 1.5 eps_y / (1 + nu). The fitted dilatation makes theta exact on every particle,
+    // so 1% under that strain nothing yields anywhere and 1% over it bonds yield both in the
+    // surface layer and inside.
+    let eps_y = 0.002;
+    let nu = 0.3;
+    let size = [0.08, 0.03, 0.03];
+    let (disc, _, lambda) = block(size, [8, 3, 3], 1.5);
+    let delta = disc.horizon();
+    let mut mat = ChenMaterial::from_young_poisson(200e9, nu, 7800.0).unwrap();
+    let b = 15.0 * mat.shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
+    let a_y = 4.0 * delta * b * eps_y;
+    mat.plasticity = Some(YieldParams {
+        psi0: 0.5 * a_y * a_y,
+        gamma_ratio: 0.2,
+        from_strain: true,
+    });
+    let x = disc.rest_positions().to_vec();
+    let inner = support::interior(&x, size, 0.75 * lambda);
+    let surface: Vec<usize> = (0..x.len()).filter(|i| !inner.contains(i)).collect();
+    assert!(!inner.is_empty() && !surface.is_empty());
+    let onset = 1.5 * eps_y / (1.0 + nu);
+    let fitted = ChenOptions {
+        fitted_dilatation: true,
+        ..ChenOptions::default()
+    };
+    // The model of `material` after one force update under uniaxial strain `e`.
+    let pulled = |material: &ChenMaterial, opts: ChenOptions, e: f64| {
+        let mut m =
+            ChenModel::with_options(disc.clone(), std::slice::from_ref(material), opts).unwrap();
+        let stretch = [1.0 + e, 1.0 - nu * e, 1.0 - nu * e];
+        let f = [
+            [stretch[0], 0.0, 0.0],
+            [0.0, stretch[1], 0.0],
+            [0.0, 0.0, stretch[2]],
+        ];
+        let mut forces = vec![[0.0; 3]; x.len()];
+        m.update_forces(&affine(&x, &f, [0.0; 3]), &mut forces);
+        m
+    };
+    for (share, expect) in [(0.99, false), (1.01, true)] {
+        let m = pulled(&mat, fitted, share * onset);
+        let (s, i) = (yielded_in(&m, &surface), yielded_in(&m, &inner));
+        eprintln!("{share} x onset: bonds yielded at the surface {s}, inside {i}");
+        assert_eq!((s > 0, i > 0), (expect, expect));
+    }
+    // The surface yields early, at 0.99 of the onset, with the same limit for every particle
+    // (the yield strain converted with MODEL.md's b while the surface's b_i is larger), and
+    // with the scalar calibration, the default (its dilatation reads the edges' shear as volume
+    // change).
+    let mut same_limit = mat.clone();
+    if let Some(p) = &mut same_limit.plasticity {
+        p.from_strain = false;
+    }
+    let scalar = ChenOptions::default();
+    for (name, material, opts) in [
+        ("one limit for all", &same_limit, fitted),
+        ("scalar calibration", &mat, scalar),
+    ] {
+        let s = yielded_in(&pulled(material, opts, 0.99 * onset), &surface);
+        eprintln!("{name}, 0.99 x onset: bonds yielded at the surface {s}");
+        assert!(s > 0);
+    }
 }

@@ -76,6 +76,43 @@ pub struct RunManifest {
     /// The model and integrator, when not the default Chen model stepped explicitly.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solver: Option<SolverJson>,
+    /// How far Chen's constants stray from MODEL.md's (absent for Xu's model).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub correction: Option<CorrectionJson>,
+}
+
+/// The spread of correction factors in `run.json` (1: MODEL.md's constant).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct SpreadJson {
+    /// Smallest factor (a fitted dilatation weight can be negative).
+    pub min: f64,
+    /// Median.
+    pub median: f64,
+    /// 99th percentile of the magnitudes.
+    pub p99: f64,
+    /// Largest magnitude.
+    pub max: f64,
+}
+
+impl From<perifrac_physics::Spread> for SpreadJson {
+    fn from(s: perifrac_physics::Spread) -> Self {
+        SpreadJson {
+            min: s.min,
+            median: s.median,
+            p99: s.p99,
+            max: s.max,
+        }
+    }
+}
+
+/// Chen's correction factors in `run.json`: per bond on the dilatation weight, per particle on
+/// `b`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct CorrectionJson {
+    /// Dilatation weights over MODEL.md's, per directed bond.
+    pub dilatation: SpreadJson,
+    /// `b_i` over MODEL.md's, per particle.
+    pub deviatoric: SpreadJson,
 }
 
 /// Which solver ran, in `run.json`.
@@ -305,6 +342,10 @@ impl FrameWriter {
             solver: (info.model != "chen" || info.integrator != "explicit").then(|| SolverJson {
                 model: info.model.into(),
                 integrator: info.integrator.into(),
+            }),
+            correction: info.correction.map(|c| CorrectionJson {
+                dilatation: c.dilatation.into(),
+                deviatoric: c.deviatoric.into(),
             }),
         };
         let mut writer = FrameWriter {

@@ -177,6 +177,10 @@ pub struct SimulationSpec {
     /// Implicit: refactor the step matrix when this share of the bonds broke since the last
     /// factorisation (default 0.02).
     pub refactor_share: Option<f64>,
+    /// Chen: how the constants meet the discrete family: `"calibrated"` (default: scalars
+    /// per particle), `"fitted"` (the dilatation fitted per bond, `b` calibrated) or `"none"`
+    /// (MODEL.md's constants).
+    pub correction: Option<String>,
     /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.
     pub influence: Option<String>,
     /// Xu: the inversion guard's factor on the rest bond stiffness (default none).

@@ -355,3 +355,71 @@ fn self_contact_keys_are_checked() {
     let off = Setup::with_limits(&scene(&off), None, &limits()).unwrap();
     assert!(off.driver.self_contact().is_none());
 }
+
+#[test]
+fn the_correction_key_is_checked_and_reported() {
+    let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
+    let e = refusal(&with("correction = \"best\"")).to_string();
+    assert!(
+        e.contains("simulation.correction") && e.contains("\"fitted\""),
+        "{e}"
+    );
+    let xu = with("correction = \"fitted\"")
+        .replace("density = 1000.0", "density = 1000.0\nmodel = \"xu\"");
+    let e = refusal(&xu).to_string();
+    assert!(
+        e.contains("simulation.correction") && e.contains("Chen"),
+        "{e}"
+    );
+    // MODEL.md's constants: every factor is 1
+    let none = Setup::with_limits(&scene(&with("correction = \"none\"")), None, &limits()).unwrap();
+    let c = none
+        .info
+        .correction
+        .expect("Chen's model reports its correction");
+    assert_eq!((c.dilatation.max, c.deviatoric.max), (1.0, 1.0));
+    // and run.json carries the spread: the fitted dilatation of a 2-cell cube, every particle
+    // a corner or edge one, has weights of both signs
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let fitted = Setup::with_limits(&scene(&with("correction = \"fitted\"")), None, &limits());
+    run(fitted.unwrap(), &dir, &mut Silent).unwrap();
+    let manifest = run_json(&dir);
+    let d = &manifest["correction"]["dilatation"];
+    assert!(d["min"].as_f64().unwrap() < 0.0, "{d}");
+    assert!(d["max"].as_f64().unwrap() > 1.0, "{d}");
+    assert!(manifest["correction"]["deviatoric"]["p99"]
+        .as_f64()
+        .is_some());
+}
+
+#[test]
+fn the_fitted_correction_is_bounded_on_a_coarse_real_mesh() {
+    // octopus-low.mesh (1,140 tets, thin arms one or two tets across) is where the fit's
+    // unbounded factors reached 1.6e5; each bond's fitted dilatation weight stays within
+    // FIT_BOUND of its particle's scalar calibration, so the largest factor stays within
+    // FIT_BOUND of the calibrated model's largest (measured 2,537 against 253.7).
+    let mesh =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/meshes/octopus-low.mesh");
+    let text = |c: &str| {
+        format!(
+            "[mesh]\nfile = \"{}\"\n\n[[material]]\nyoung = 1e7\npoisson = 0.3\ndensity = 1000.0\n\n\
+             [simulation]\nduration = 1e-4\ncorrection = \"{c}\"\n",
+            mesh.display()
+        )
+    };
+    let info = |c: &str| {
+        Setup::with_limits(&scene(&text(c)), None, &limits())
+            .unwrap()
+            .info
+            .correction
+            .unwrap()
+    };
+    let (fitted, scalar) = (info("fitted"), info("calibrated"));
+    eprintln!("octopus-low: fitted {fitted:?}\ncalibrated {scalar:?}");
+    let bound = perifrac_physics::material::chen::FIT_BOUND;
+    assert!(fitted.dilatation.max <= bound * scalar.dilatation.max * (1.0 + 1e-12));
+    assert!(fitted.dilatation.max > scalar.dilatation.max);
+    // b is calibrated the same way in both
+    assert_eq!(fitted.deviatoric, scalar.deviatoric);
+}

@@ -2,8 +2,9 @@
 //! Decisions: `Lambda = 1`, `ed = e - theta r / 3`, return-map increment `/(4 omega b)`,
 //! threshold-scaled fracture).
 
+use super::fit::{dilatation_weights, fit_tensors, Correction, Spread};
 use super::kernel::{
-    dilatation, dilatation_breaking, energy_density, force, return_map, AllAlive, Inputs,
+    dilatation, dilatation_breaking, energy_density, force, return_map, AllAlive, Fitted, Inputs,
     Isotropic, Mask, NoPlastic, PerBond, WithPlastic,
 };
 use super::same_features;
@@ -37,13 +38,34 @@ pub struct ChenOptions {
     /// (corners most), which raises `omega_max`: 7.89e5 to 1.23e6 rad/s on a 3 x 3 x 3-cell
     /// steel block at k = 1.5, so the stable step shrinks by a third.
     pub calibrated: bool,
+    /// Fitted dilatation weights (`fit.rs`): each bond's dilatation weight becomes
+    /// `omega_ij (n n : L_i)` with one symmetric tensor `L_i` per particle fitted so that every
+    /// homogeneous small strain gives `theta_i = tr(eps)` on every particle, cut families
+    /// included (the scalar `c_i` gets only the trace right: on unevenly cut families it reads
+    /// shear as volume change). The deviatoric weights stay `omega_ij`, with `b_i` as
+    /// `calibrated` says. Needs per-bond weights (8 bytes a bond, twice with anisotropy).
+    pub fitted_dilatation: bool,
 }
+
+/// Ridge of the dilatation fit, a share of the family moment's mean diagonal pulling `L_i`
+/// towards the scalar calibration: a guard against families whose directions do not span the
+/// six strain modes, small enough to leave spanning families fitted to round-off.
+pub const FIT_RIDGE: f64 = 1e-9;
+
+/// The fitted dilatation weight of a bond stays within this factor of the scalar calibration's
+/// (`|d_ij| <= FIT_BOUND c_i omega_ij`): a particle whose fit needs more is blended towards the
+/// scalar calibration until its largest factor is this. Every Kuhn-lattice block measured (2 to
+/// 8 cells across, k = 1 to 2) needs at most 7.5 (on corner bonds), so lattice meshes are fitted
+/// exactly; families whose directions nearly fail to span the six strain modes (a thin part one
+/// tet across) asked for up to 1.6e5 on `octopus-low.mesh`.
+pub const FIT_BOUND: f64 = 10.0;
 
 impl Default for ChenOptions {
     fn default() -> Self {
         ChenOptions {
             energy_consistent: true,
             calibrated: true,
+            fitted_dilatation: false,
         }
     }
 }
@@ -60,8 +82,10 @@ struct Setup {
     coef_b: Vec<f64>,
     /// Per-particle `c_i` (`9 / (4 pi delta^4)` unless calibrated).
     c_theta: Vec<f64>,
-    /// Per-bond `omega` when some material is anisotropic.
+    /// Per-bond `omega` when some material is anisotropic or the dilatation is fitted.
     weights: Option<Vec<f64>>,
+    /// Per-bond fitted dilatation weights `d_ij` (over `c_i`), when the dilatation is fitted.
+    dil_weights: Option<Vec<f64>>,
     /// Reverse-bond index, when plastic or anisotropic.
     reverse: Option<Vec<u32>>,
     /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
@@ -98,13 +122,21 @@ macro_rules! with_wd {
         }
     };
     (@w $setup:expr, $w:ident, $body:expr) => {
-        match $setup.weights.as_deref() {
-            None => {
+        match ($setup.weights.as_deref(), $setup.dil_weights.as_deref()) {
+            (None, _) => {
                 let $w = Isotropic { delta: $setup.disc.horizon() };
                 $body
             }
-            Some(wv) => {
+            (Some(wv), None) => {
                 let $w = PerBond { w: wv, rev: $setup.reverse.as_deref().expect("reverse index") };
+                $body
+            }
+            (Some(wv), Some(dw)) => {
+                let $w = Fitted {
+                    w: wv,
+                    dw,
+                    rev: $setup.reverse.as_deref().expect("reverse index"),
+                };
                 $body
             }
         }
@@ -152,7 +184,7 @@ impl ChenModel {
         let mat = |i: usize| &materials[disc.materials()[i] as usize];
         let fam = disc.family();
         let anisotropic = materials.iter().any(|m| m.anisotropy.is_some());
-        let weights = anisotropic.then(|| {
+        let weights = (anisotropic || options.fitted_dilatation).then(|| {
             let x = disc.rest_positions();
             let mut w = vec![0.0; fam.num_bonds()];
             for i in 0..n {
@@ -187,7 +219,7 @@ impl ChenModel {
         let coef_a = (0..n)
             .map(|i| mat(i).bulk_modulus * c_theta[i] / 2.0)
             .collect();
-        let coef_b = (0..n)
+        let coef_b: Vec<f64> = (0..n)
             .map(|i| match moments[i].1 {
                 m2 if options.calibrated && m2 > 0.0 => 15.0 * mat(i).shear_modulus / (2.0 * m2),
                 _ => 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5)),
@@ -197,13 +229,47 @@ impl ChenModel {
         let mass = (0..n).map(|i| density[i] * disc.volumes()[i]).collect();
         let plastic = materials.iter().any(|m| m.plasticity.is_some());
         let fractures = materials.iter().any(ChenMaterial::fractures);
-        let reverse = (anisotropic || plastic).then(|| fam.reverse_index());
+        let reverse =
+            (anisotropic || plastic || options.fitted_dilatation).then(|| fam.reverse_index());
+        // d_ij / c_i, so that theta_i = c_i sum_j (d_ij / c_i) e_ij V_j keeps the kernel's form
+        // (omega_ij times the fit's factor on the scalar calibration, bounded by FIT_BOUND)
+        let dil_weights = match (&weights, options.fitted_dilatation) {
+            (Some(w), true) => {
+                let x = disc.rest_positions();
+                // fitted around the calibrated scalar 3 / sum omega r V whether or not the
+                // constants are calibrated, then over the particle's own c_i
+                let s: Vec<f64> = (0..n)
+                    .map(|i| match moments[i].0 {
+                        m1 if m1 > 0.0 => 3.0 / m1,
+                        _ => c0,
+                    })
+                    .collect();
+                let l = fit_tensors(fam, x, disc.volumes(), w, &s, FIT_RIDGE);
+                let mut d = dilatation_weights(fam, x, w, &l, &s, FIT_BOUND);
+                for i in 0..n {
+                    for k in fam.range(i) {
+                        d[k] *= s[i] / c_theta[i];
+                    }
+                }
+                Some(d)
+            }
+            _ => None,
+        };
         let yield_params = plastic.then(|| {
             (0..n)
                 .map(|i| {
                     mat(i)
                         .plasticity
-                        .map_or((f64::INFINITY, f64::INFINITY), |p| (p.psi0, p.gamma_ratio))
+                        .map_or((f64::INFINITY, f64::INFINITY), |p| {
+                            // a yield strain's Psi0 scales with b_i^2 (A_dev = 4 omega b_i ed)
+                            let b0 = 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5));
+                            let scale = if p.from_strain {
+                                (coef_b[i] / b0).powi(2)
+                            } else {
+                                1.0
+                            };
+                            (p.psi0 * scale, p.gamma_ratio)
+                        })
                 })
                 .collect()
         });
@@ -225,6 +291,7 @@ impl ChenModel {
                 coef_a,
                 coef_b,
                 weights,
+                dil_weights,
                 reverse,
                 yield_params,
                 options,
@@ -272,6 +339,59 @@ impl ChenModel {
     /// Constants `(a_i, b_i)` of particle `i` (N/m^6 per unit dilatation, N/m^7 per m).
     pub fn constants(&self, i: usize) -> (f64, f64) {
         (self.setup.coef_a[i], self.setup.coef_b[i])
+    }
+
+    /// How far the model's constants stray from MODEL.md's (`9 / (4 pi delta^4)` and
+    /// `15 mu / (2 pi delta^5)`): per bond, the dilatation weight over MODEL.md's
+    /// (`c_i d_ij / (c0 omega_ij)`: `c_i / c0` calibrated, `n n : L_i / c0` fitted, 1 with
+    /// neither), and per particle `b_i / b0`.
+    pub fn correction(&self) -> Correction {
+        let s = &self.setup;
+        let fam = s.disc.family();
+        let delta = s.disc.horizon();
+        let c0 = 9.0 / (4.0 * PI * delta.powi(4));
+        let mut dil = Vec::with_capacity(fam.num_bonds());
+        for i in 0..fam.len() {
+            for k in fam.range(i) {
+                let f = match (&s.dil_weights, &s.weights) {
+                    (Some(d), Some(w)) => d[k] / w[k],
+                    _ => 1.0,
+                };
+                dil.push(f * s.c_theta[i] / c0);
+            }
+        }
+        Correction {
+            dilatation: Spread::of(dil),
+            deviatoric: Spread::of(self.deviatoric_factors()),
+        }
+    }
+
+    /// `b_i / b0` per particle: `pi delta^5 / sum_j omega_ij r_ij^2 V_j` calibrated, 1 without.
+    fn deviatoric_factors(&self) -> Vec<f64> {
+        let s = &self.setup;
+        let fam = s.disc.family();
+        let delta = s.disc.horizon();
+        let m0 = PI * delta.powi(5);
+        (0..fam.len())
+            .map(|i| {
+                if !s.options.calibrated {
+                    return 1.0;
+                }
+                let m2: f64 = fam
+                    .range(i)
+                    .map(|k| {
+                        let r = fam.rest_lengths()[k];
+                        let w = s.weights.as_ref().map_or(delta / r, |w| w[k]);
+                        w * r * r * s.disc.volumes()[fam.neighbours()[k] as usize]
+                    })
+                    .sum();
+                if m2 > 0.0 {
+                    m0 / m2
+                } else {
+                    1.0
+                }
+            })
+            .collect()
     }
 
     /// Recomputes `theta` at `y` (and runs the return map when `advance`), then `pq`.
@@ -505,9 +625,13 @@ impl ForceModel for ChenModel {
                     (Some(w), Some(rev)) => (w[k], w[rev[k] as usize]),
                     _ => (delta / r, delta / r),
                 };
+                let (dij, dji) = match (&s.dil_weights, &s.reverse) {
+                    (Some(d), Some(rev)) => (d[k], d[rev[k] as usize]),
+                    _ => (wij, wji),
+                };
                 let c = 2.0 * (wij * s.coef_b[i] + wji * s.coef_b[j])
-                    + 2.0 * s.c_theta[i] * s.coef_a[i] * wij * wij * vol[j]
-                    + 2.0 * s.c_theta[j] * s.coef_a[j] * wji * wji * vol[i];
+                    + 2.0 * s.c_theta[i] * s.coef_a[i] * dij * dij * vol[j]
+                    + 2.0 * s.c_theta[j] * s.coef_a[j] * dji * dji * vol[i];
                 sum += c * vol[j];
             }
             if sum > 0.0 {
@@ -538,6 +662,7 @@ impl ForceModel for ChenModel {
             coef_b,
             c_theta,
             weights,
+            dil_weights,
             reverse,
             yield_params,
             options: _,
@@ -545,6 +670,7 @@ impl ForceModel for ChenModel {
         disc.memory_bytes()
             + 8 * (mass.len() + density.len() + coef_a.len() + coef_b.len() + c_theta.len())
             + weights.as_ref().map_or(0, |w| 8 * w.len())
+            + dil_weights.as_ref().map_or(0, |w| 8 * w.len())
             + reverse.as_ref().map_or(0, |r| 4 * r.len())
             + yield_params.as_ref().map_or(0, |y| 16 * y.len())
             + ep.as_ref().map_or(0, |e| 8 * e.len())

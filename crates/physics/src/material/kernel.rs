@@ -5,9 +5,18 @@ use crate::family::Family;
 use crate::fracture::Breaker;
 use crate::math::{norm, sub, Vec3};
 
-/// Bond weights `omega_ij` (own side) and `omega_ji` (the other side) of bond `k`.
+/// Bond weights `omega_ij` (own side) and `omega_ji` (the other side) of bond `k`: the
+/// deviatoric weights, and the dilatation weights where a fitted correction makes them differ.
 pub(crate) trait Weights: Sync + Copy {
+    /// Whether the dilatation weights differ from the deviatoric ones (a compile-time switch:
+    /// without it the loops keep their single-weight arithmetic, bit for bit).
+    const SPLIT: bool = false;
     fn pair(&self, k: usize, r: f64) -> (f64, f64);
+    /// The dilatation weights `d_ij`, `d_ji` of bond `k` (the deviatoric ones unless `SPLIT`).
+    #[inline(always)]
+    fn dil_pair(&self, k: usize, r: f64) -> (f64, f64) {
+        self.pair(k, r)
+    }
 }
 
 /// Isotropic weight `delta / r`, the same both ways.
@@ -35,6 +44,29 @@ impl Weights for PerBond<'_> {
     #[inline(always)]
     fn pair(&self, k: usize, _r: f64) -> (f64, f64) {
         (self.w[k], self.w[self.rev[k] as usize])
+    }
+}
+
+/// Per-directed-bond deviatoric weights `w` and fitted dilatation weights `dw` (the
+/// dilatation fit of [`super::ChenOptions::fitted_dilatation`]), with the reverse-bond index.
+#[derive(Clone, Copy)]
+pub(crate) struct Fitted<'a> {
+    pub w: &'a [f64],
+    pub dw: &'a [f64],
+    pub rev: &'a [u32],
+}
+
+impl Weights for Fitted<'_> {
+    const SPLIT: bool = true;
+
+    #[inline(always)]
+    fn pair(&self, k: usize, _r: f64) -> (f64, f64) {
+        (self.w[k], self.w[self.rev[k] as usize])
+    }
+
+    #[inline(always)]
+    fn dil_pair(&self, k: usize, _r: f64) -> (f64, f64) {
+        (self.dw[k], self.dw[self.rev[k] as usize])
     }
 }
 
@@ -153,7 +185,11 @@ pub(crate) fn dilatation<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
         let r = rl[k];
         let e = norm(sub(inp.y[j], yi)) - r;
         let wv = w.pair(k, r).0 * inp.volumes[j];
-        acc += wv * e;
+        if W::SPLIT {
+            acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
+        } else {
+            acc += wv * e;
+        }
         if MOMENT {
             u += wv * r * (e - p.pair(k).0);
             m += wv * r * r;
@@ -197,7 +233,11 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
             continue;
         }
         let wv = w.pair(k, r).0 * inp.volumes[j];
-        acc += wv * e;
+        if W::SPLIT {
+            acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
+        } else {
+            acc += wv * e;
+        }
         if MOMENT {
             u += wv * r * e;
             m += wv * r * r;
@@ -277,8 +317,18 @@ pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
         let (wij, wji) = w.pair(k, r);
         let (epij, epji) = p.pair(k);
         let [pj, qj] = pq[j];
-        let aij = wij * (pi + bi * (e - epij) - qi * r);
-        let aji = wji * (pj + coef_b[j] * (e - epji) - qj * r);
+        let (aij, aji) = if W::SPLIT {
+            let (dij, dji) = w.dil_pair(k, r);
+            (
+                dij * pi + wij * (bi * (e - epij) - qi * r),
+                dji * pj + wji * (coef_b[j] * (e - epji) - qj * r),
+            )
+        } else {
+            (
+                wij * (pi + bi * (e - epij) - qi * r),
+                wji * (pj + coef_b[j] * (e - epji) - qj * r),
+            )
+        };
         // 0.5 (A_ij + A_ji) with A = 4 omega (...): the pair scalar is bitwise the same from both
         // ends (commutative sums and products), so Newton's third law holds bond by bond.
         let s = 2.0 * (aij + aji) * (vi * inp.volumes[j]) / l;

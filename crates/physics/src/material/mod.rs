@@ -2,6 +2,7 @@
 
 pub mod basis;
 pub mod chen;
+mod fit;
 pub(crate) mod kernel;
 pub mod params;
 pub mod xu;
@@ -11,6 +12,7 @@ pub mod xu_params;
 
 pub use basis::{Basis, Curve};
 pub use chen::{ChenModel, ChenOptions};
+pub use fit::{Correction, Spread};
 pub use params::{ChenMaterial, FractureParams, YieldParams};
 pub use xu::{XuKernelShape, XuModel, XuOptions};
 pub use xu_params::{XuAnisotropy, XuMaterial, XuModuli};

@@ -10,6 +10,11 @@ pub struct YieldParams {
     pub psi0: f64,
     /// Cap of the plastic extension as a ratio of the rest bond length (dimensionless).
     pub gamma_ratio: f64,
+    /// `psi0` was converted from a yield strain with MODEL.md's `b = 15 mu / (2 pi delta^5)`:
+    /// each particle scales it by `(b_i / b)^2`, so that a bond yields at that deviatoric
+    /// strain with the particle's own (corrected) `b_i`, at the surface as in the bulk. False:
+    /// `psi0` is the paper's raw limit, the same for every particle.
+    pub from_strain: bool,
 }
 
 /// Fracture criterion (MODEL.md section 2, Fracture).

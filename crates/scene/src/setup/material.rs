@@ -276,23 +276,25 @@ fn chen_material(
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key, "give either yield_psi0 or yield_strain, not both"))
         }
-        (Some(p), None) => Some(ctx.positive(&format!("{key}.yield_psi0"), p, "")?),
+        (Some(p), None) => Some((ctx.positive(&format!("{key}.yield_psi0"), p, "")?, false)),
         (None, Some(eps)) => {
             let eps = ctx.positive(&format!("{key}.yield_strain"), eps, "")?;
-            // A_dev = 4 omega b ed with omega = delta / r and ed = eps r: |A_dev| = 4 delta b eps.
+            // A_dev = 4 omega b ed with omega = delta / r and ed = eps r: |A_dev| = 4 delta b eps,
+            // with MODEL.md's b here; each particle rescales it to its own b_i (from_strain).
             let b = 15.0 * mat.shear_modulus / (2.0 * PI * horizon.powi(5));
             let a = 4.0 * horizon * b * eps;
-            Some(0.5 * a * a)
+            Some((0.5 * a * a, true))
         }
         (None, None) => None,
     };
     match (psi0, m.plastic_cap) {
-        (Some(psi0), cap) => {
+        (Some((psi0, from_strain)), cap) => {
             let cap = cap.unwrap_or(defaults::PLASTIC_CAP);
             ctx.positive(&format!("{key}.plastic_cap"), cap, "")?;
             mat.plasticity = Some(YieldParams {
                 psi0,
                 gamma_ratio: cap,
+                from_strain,
             });
         }
         (None, Some(_)) => {

@@ -2,9 +2,9 @@
 
 use perifrac_physics::integrate::event_search::MAX_LEVELS;
 use perifrac_physics::{
-    ChenModel, Discretization, EventSearchConfig, Explicit, ExplicitConfig, ForceModel, Implicit,
-    ImplicitConfig, Loads, PhysicsError, Searched, Solver, TimeStep, XuKernelShape, XuModel,
-    XuOptions,
+    ChenModel, ChenOptions, Discretization, EventSearchConfig, Explicit, ExplicitConfig,
+    ForceModel, Implicit, ImplicitConfig, Loads, PhysicsError, Searched, Solver, TimeStep,
+    XuKernelShape, XuModel, XuOptions,
 };
 
 use crate::error::SceneError;
@@ -134,9 +134,35 @@ pub(super) fn model(
                     ));
                 }
             }
-            Ok(AnyModel::Chen(ChenModel::new(disc, m).map_err(physics)?))
+            let base = ChenOptions::default();
+            let options = match sim.correction.as_deref() {
+                None | Some("calibrated") => base,
+                Some("fitted") => ChenOptions {
+                    fitted_dilatation: true,
+                    ..base
+                },
+                Some("none") => ChenOptions {
+                    calibrated: false,
+                    ..base
+                },
+                Some(other) => {
+                    return Err(ctx.err(
+                        "simulation.correction",
+                        format!("\"{other}\": expected \"calibrated\", \"fitted\" or \"none\""),
+                    ))
+                }
+            };
+            Ok(AnyModel::Chen(
+                ChenModel::with_options(disc, m, options).map_err(physics)?,
+            ))
         }
         Materials::Xu(m) => {
+            if sim.correction.is_some() {
+                return Err(ctx.err(
+                    "simulation.correction",
+                    "is a setting of Chen's model (Xu's has no per-particle constants)",
+                ));
+            }
             let kernel = match sim.influence.as_deref() {
                 None | Some("constant") => XuKernelShape::Constant,
                 Some("inverse") => XuKernelShape::Inverse,

@@ -184,6 +184,10 @@ pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
     ("simulation.refactor_share", "an implicit-integrator key"),
     ("simulation.influence", "a key of Xu's peridynamic model"),
     (
+        "simulation.correction",
+        "a key of Chen's peridynamic model (shells have no horizon)",
+    ),
+    (
         "simulation.inversion_guard",
         "a key of Xu's peridynamic model",
     ),

@@ -1,0 +1,249 @@
+//! The fitted dilatation (issue 18): per-bond dilatation weights `d_ij = omega_ij (n n : L_i)`,
+//! with one symmetric tensor `L_i` per particle chosen so that
+//! `sum_j d_ij r_ij (n n) V_j = I` over the particle's own rest family. Then every homogeneous
+//! small strain `eps` (bond extensions `r n . eps . n`) gives `theta_i = tr(eps)` exactly on
+//! every particle, cut families at surfaces, edges and corners included: a pure shear gives no
+//! dilatation and a pure dilatation no deviatoric extension. A scalar per particle (the
+//! calibration `c_i = 3 / sum omega r V`) can only match the trace of that moment, so on a
+//! family cut unevenly it reads shear as volume change.
+//!
+//! The six conditions are linear in `L_i` (Mandel components `q(n)`:
+//! `sum_j omega r V q q^T L = (1, 1, 1, 0, 0, 0)`), a 6 x 6 symmetric positive semi-definite
+//! system per particle, solved by Cholesky with a small ridge towards the scalar calibration
+//! (which is the answer for a family that is symmetric enough and stands in where the
+//! family's directions do not span the six modes).
+
+// Small dense factorisations: index loops read as the formulas do.
+#![allow(clippy::needless_range_loop)]
+
+use crate::family::Family;
+use crate::math::Vec3;
+use crate::par::map_particles;
+
+/// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
+/// `L`.
+#[inline]
+fn mandel(n: Vec3) -> [f64; 6] {
+    let s = std::f64::consts::SQRT_2;
+    [
+        n[0] * n[0],
+        n[1] * n[1],
+        n[2] * n[2],
+        s * n[1] * n[2],
+        s * n[0] * n[2],
+        s * n[0] * n[1],
+    ]
+}
+
+/// Solves `a x = b` for a symmetric positive definite 6 x 6 `a` by Cholesky; `None` when a
+/// pivot is not positive.
+fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
+    for c in 0..6 {
+        let mut d = a[c][c];
+        for k in 0..c {
+            d -= a[c][k] * a[c][k];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return None;
+        }
+        let d = d.sqrt();
+        a[c][c] = d;
+        for r in c + 1..6 {
+            let mut s = a[r][c];
+            for k in 0..c {
+                s -= a[r][k] * a[c][k];
+            }
+            a[r][c] = s / d;
+        }
+    }
+    for r in 0..6 {
+        for k in 0..r {
+            b[r] -= a[r][k] * b[k];
+        }
+        b[r] /= a[r][r];
+    }
+    for r in (0..6).rev() {
+        for k in r + 1..6 {
+            b[r] -= a[k][r] * b[k];
+        }
+        b[r] /= a[r][r];
+    }
+    Some(b)
+}
+
+/// The Mandel vector `l_i` of every particle's fitted tensor `L_i`: the family's moment
+/// `A_i = sum_j omega_ij r_ij V_j q q^T` (rest directions `n = (X_j - X_i) / r`, deviatoric weights
+/// `w`), ridged by `ridge` times its mean diagonal towards `c_i I` (the scalar calibration, `c`),
+/// then solved for `(1, 1, 1, 0, 0, 0)`. A particle whose system has no positive pivot (no bonds)
+/// keeps `c_i I`.
+pub(crate) fn fit_tensors(
+    fam: &Family,
+    x: &[Vec3],
+    vol: &[f64],
+    w: &[f64],
+    c: &[f64],
+    ridge: f64,
+) -> Vec<[f64; 6]> {
+    let mut out = vec![[0.0; 6]; fam.len()];
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    map_particles(&mut out, |i| {
+        let scalar = [c[i], c[i], c[i], 0.0, 0.0, 0.0];
+        let mut a = [[0.0; 6]; 6];
+        for k in fam.range(i) {
+            let j = nb[k] as usize;
+            let r = rl[k];
+            let xi = x[j];
+            let n = [
+                (xi[0] - x[i][0]) / r,
+                (xi[1] - x[i][1]) / r,
+                (xi[2] - x[i][2]) / r,
+            ];
+            let q = mandel(n);
+            let s = w[k] * r * vol[j];
+            for p in 0..6 {
+                for t in 0..=p {
+                    a[p][t] += s * q[p] * q[t];
+                }
+            }
+        }
+        for p in 0..6 {
+            for t in 0..p {
+                a[t][p] = a[p][t];
+            }
+        }
+        let tau = ridge * (0..6).map(|p| a[p][p]).sum::<f64>() / 6.0;
+        let mut b = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+        for p in 0..6 {
+            a[p][p] += tau;
+            b[p] += tau * scalar[p];
+        }
+        cholesky_solve(a, b).unwrap_or(scalar)
+    });
+    out
+}
+
+/// Per-bond dilatation weights over the scalar calibration, `d_ij / c_i = w_ij g_ij`, with
+/// `g_ij = q(n_ij) . l_i / c_i` the fit's factor. A particle whose largest `|g_ij|` passes `bound`
+/// is blended towards the scalar calibration (`g = 1`): `g' = 1 + a (g - 1)` with the largest
+/// `a <= 1` that keeps every `|g'| <= bound` (its fit is then exact no more).
+pub(crate) fn dilatation_weights(
+    fam: &Family,
+    x: &[Vec3],
+    w: &[f64],
+    l: &[[f64; 6]],
+    c: &[f64],
+    bound: f64,
+) -> Vec<f64> {
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    let mut d = vec![0.0; fam.num_bonds()];
+    for i in 0..fam.len() {
+        let range = fam.range(i);
+        let mut worst: f64 = 0.0;
+        for k in range.clone() {
+            let j = nb[k] as usize;
+            let r = rl[k];
+            let n = [
+                (x[j][0] - x[i][0]) / r,
+                (x[j][1] - x[i][1]) / r,
+                (x[j][2] - x[i][2]) / r,
+            ];
+            let q = mandel(n);
+            let g = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
+            d[k] = g;
+            worst = worst.max((g - 1.0).abs());
+        }
+        // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
+        let a = if worst > bound - 1.0 {
+            (bound - 1.0) / worst
+        } else {
+            1.0
+        };
+        for k in range {
+            d[k] = w[k] * (1.0 + a * (d[k] - 1.0));
+        }
+    }
+    d
+}
+
+/// A distribution of correction factors (1: MODEL.md's constant).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spread {
+    /// Smallest factor.
+    pub min: f64,
+    /// Median.
+    pub median: f64,
+    /// 99th percentile of the factors' magnitudes.
+    pub p99: f64,
+    /// Largest magnitude.
+    pub max: f64,
+}
+
+impl Spread {
+    /// The spread of `v` (all 1 when empty).
+    pub fn of(mut v: Vec<f64>) -> Spread {
+        if v.is_empty() {
+            return Spread {
+                min: 1.0,
+                median: 1.0,
+                p99: 1.0,
+                max: 1.0,
+            };
+        }
+        v.sort_by(f64::total_cmp);
+        let min = v[0];
+        let median = v[v.len() / 2];
+        let mut mag: Vec<f64> = v.iter().map(|x| x.abs()).collect();
+        mag.sort_by(f64::total_cmp);
+        let p99 = mag[(mag.len() - 1) * 99 / 100];
+        let max = mag[mag.len() - 1];
+        Spread {
+            min,
+            median,
+            p99,
+            max,
+        }
+    }
+}
+
+/// How far a Chen model's constants stray from MODEL.md's, from
+/// [`super::ChenModel::correction`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Correction {
+    /// Per directed bond: the dilatation weight over MODEL.md's.
+    pub dilatation: Spread,
+    /// Per particle: the deviatoric constant `b_i` over MODEL.md's.
+    pub deviatoric: Spread,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cholesky_solves_a_symmetric_system() {
+        // a = m m^T + I for a fixed m: symmetric positive definite
+        let mut a = [[0.0; 6]; 6];
+        for p in 0..6 {
+            for t in 0..6 {
+                a[p][t] = (0..6)
+                    .map(|k| ((p * 7 + k * 3) % 5) as f64 * ((t * 7 + k * 3) % 5) as f64)
+                    .sum::<f64>()
+                    + if p == t { 1.0 } else { 0.0 };
+            }
+        }
+        let x = [1.0, -2.0, 0.5, 3.0, 0.0, -1.0];
+        let b: Vec<f64> = (0..6)
+            .map(|p| (0..6).map(|t| a[p][t] * x[t]).sum())
+            .collect();
+        let got = cholesky_solve(a, b.try_into().unwrap()).unwrap();
+        for p in 0..6 {
+            // entries of a up to ~100, condition far below 1e4: 1e-10 is generous round-off
+            assert!((got[p] - x[p]).abs() < 1e-10, "{got:?}");
+        }
+        let mut singular = [[0.0; 6]; 6];
+        singular[0][0] = 1.0;
+        assert!(cholesky_solve(singular, [1.0; 6]).is_none());
+    }
+}
