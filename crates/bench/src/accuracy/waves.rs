@@ -13,6 +13,7 @@ use super::{
     material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, POISSON, SIDE, YOUNG,
 };
 use crate::bar::{block, fit_line, rest_of, set_velocities, Body, FittedChen};
+use crate::table::Table;
 use crate::{BenchError, Effort};
 
 /// A `len` x 0.1 x 0.1 m bar of the cases' material from the origin, `nx` cells along and
@@ -34,11 +35,12 @@ fn bar(
     }
 }
 
-/// Measured `(E / E0, nu)` and the run's cost: a 0.4 x 0.1 x 0.1 m bar of `nx` cells along,
-/// both end layers (one horizon deep) anchored, one pulled to 0.1% strain, relaxed with
+/// Measured `(E / E0, nu)`, the run's cost and the horizon (m): a 0.4 x 0.1 x 0.1 m bar of
+/// `nx` cells along, both end layers (one horizon deep) anchored, one pulled to 0.1% strain,
+/// relaxed with
 /// critical damping of the first axial mode over 40 of its time constants. Strains are fitted
 /// over the middle third; the stress is the pulled anchor's reaction over the section.
-fn tension(nx: usize, k: f64, fitted: bool) -> Result<(f64, f64, Run), BenchError> {
+fn tension(nx: usize, k: f64, fitted: bool) -> Result<(f64, f64, Run, f64), BenchError> {
     let started = Instant::now();
     let len = 0.4;
     let n = (nx / 4).max(1);
@@ -92,7 +94,7 @@ fn tension(nx: usize, k: f64, fitted: bool) -> Result<(f64, f64, Run), BenchErro
     let reaction: f64 = right.iter().map(|&i| s.forces()[i as usize][0]).sum();
     let stress = -reaction / (SIDE * SIDE);
     let run = Run::peridynamics([nx, n, n], k, started, steps, bonds);
-    Ok((stress / exx / YOUNG, -eyy / exx, run))
+    Ok((stress / exx / YOUNG, -eyy / exx, run, delta))
 }
 
 /// The moduli case: E and nu from uniaxial tension over the sweep.
@@ -115,7 +117,7 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
             progress(&format!(
                 "moduli: uniaxial tension at {nx} cells along, k = {k}{tag}"
             ));
-            let (e, nu, run) = tension(nx, k, fitted)?;
+            let (e, nu, run, _) = tension(nx, k, fitted)?;
             runs.push(Run {
                 method: format!("PD{tag} E"),
                 value: e * YOUNG,
@@ -130,6 +132,40 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
             });
         }
     }
+    // m-convergence: the horizon held at its 1.5-factor value on the coarsest bar while the
+    // cells shrink (k grows with the cells along), calibrated and fitted.
+    let mut fixed = Table::new(&[
+        "correction",
+        "cells",
+        "k",
+        "horizon (m)",
+        "m = horizon / cell",
+        "E error",
+        "nu",
+        "wall time (s)",
+    ]);
+    let coarsest = levels.first().copied().unwrap_or(16) as f64;
+    for fitted in [false, true] {
+        for &nx in levels {
+            let k = 1.5 * nx as f64 / coarsest;
+            let name = if fitted { "fitted" } else { "calibrated" };
+            progress(&format!(
+                "moduli: fixed horizon, {nx} cells along (k = {k}), {name}"
+            ));
+            let (e, nu, run, horizon) = tension(nx, k, fitted)?;
+            let cell = 0.4 / nx as f64;
+            fixed.push(vec![
+                name.into(),
+                run.resolution.clone(),
+                format!("{k:.2}"),
+                format!("{horizon:.4}"),
+                format!("{:.2}", horizon / cell),
+                format!("{:+.2}%", 100.0 * (e - 1.0)),
+                format!("{nu:.4}"),
+                format!("{:.1}", run.wall_s),
+            ]);
+        }
+    }
     let (table, plot) = table_and_plot("Moduli from uniaxial tension", "Pa or 1", &runs);
     let text = format!(
         "Young's modulus and Poisson's ratio measured on a 0.4 x 0.1 x 0.1 m bar in uniaxial \
@@ -140,7 +176,11 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
          4 to 8 cells is 1.6 to 6.3 horizons across, so the particles near the surface, whose \
          families are cut, weigh in (calibration makes them stiffer, MODEL.md's constants \
          softer: docs/DECISIONS.md). \"PD fitted\" rows fit each particle's dilatation \
-         weights to read every homogeneous strain exactly (`correction = \"fitted\"`)."
+         weights to read every homogeneous strain exactly (`correction = \"fitted\"`). The \
+         second table holds the horizon (m) fixed at its value on the coarsest bar at k = 1.5 \
+         while the cells shrink (m-convergence, the peridynamic literature's study: the \
+         discrete sums approach the nonlocal model's integrals); the first table's sweeps hold \
+         m fixed and shrink the horizon with the cells."
     );
     Ok(CaseReport {
         name: "moduli".into(),
@@ -149,7 +189,7 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
         table,
         plot,
         runs,
-        tables: Vec::new(),
+        tables: vec![("Fixed horizon, finer cells (m-convergence)".into(), fixed)],
     })
 }
 
