@@ -172,9 +172,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             d.min, d.max, d.median, d.p99, b.min, b.max, b.median, b.p99
         );
         use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};
-        if d.p99.max(b.p99) > CORRECTION_WARNING || d.max.max(b.max) > CORRECTION_WARNING_MAX {
+        // b_i / b0 is a full ball's moment over the family's: how much of it a particle lost
+        if b.p99 > CORRECTION_WARNING || b.max > CORRECTION_WARNING_MAX {
             eprintln!(
-                "warning: correction factors past {CORRECTION_WARNING} (1 in 100) or \
+                "warning: factors on b past {CORRECTION_WARNING} (1 in 100) or \
                  {CORRECTION_WARNING_MAX} (any): some particles have lost most of their family \
                  (tets much larger than the horizon, or parts one or two tets across); a finer \
                  or more even mesh, or a larger horizon factor, gives them more bonds"

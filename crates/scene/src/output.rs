@@ -105,11 +105,11 @@ impl From<perifrac_physics::Spread> for SpreadJson {
     }
 }
 
-/// Chen's correction factors in `run.json`: per bond on the dilatation weight, per particle on
-/// `b`.
+/// Chen's correction factors in `run.json`, per particle: the largest on its dilatation
+/// weights, and on `b`.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 pub struct CorrectionJson {
-    /// Dilatation weights over MODEL.md's, per directed bond.
+    /// Dilatation weights over MODEL.md's: each particle's of largest magnitude.
     pub dilatation: SpreadJson,
     /// `b_i` over MODEL.md's, per particle.
     pub deviatoric: SpreadJson,

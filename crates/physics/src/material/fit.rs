@@ -211,7 +211,7 @@ impl Spread {
 /// [`super::ChenModel::correction`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Correction {
-    /// Per directed bond: the dilatation weight over MODEL.md's.
+    /// Per particle: the dilatation weight over MODEL.md's of largest magnitude on its bonds.
     pub dilatation: Spread,
     /// Per particle: the deviatoric constant `b_i` over MODEL.md's.
     pub deviatoric: Spread,

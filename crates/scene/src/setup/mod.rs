@@ -65,16 +65,15 @@ pub mod defaults {
     /// than this fraction of the mean contact radius per step: the contact potential is then
     /// seen within a step, never tunnelled through.
     pub const IMPLICIT_TRAVEL_FRACTION: f64 = 1.0;
-    /// `perifrac run` warns when one in a hundred of Chen's correction factors (dilatation
-    /// weights per bond, `b_i` per particle, over MODEL.md's) passes this: a particle whose
-    /// family holds under a tenth of a full ball's moment has lost most of its neighbours (a
-    /// tet far larger than the horizon, or a thin part one or two tets across), and its
-    /// stiffness rests on a few bonds. Meshes of `perifrac mesh` stay under it (99th
-    /// percentiles 2.4 to 6.2 on the shared surfaces at resolution 20), while their largest
-    /// factors, on a few corner slivers, reach 9 to 31.
+    /// `perifrac run` warns when one particle in a hundred has a calibrated `b_i` over
+    /// MODEL.md's `b` past this: `b_i / b` is a full ball's moment over the particle's family's,
+    /// so such a particle has lost most of its neighbours (a tet far larger than the horizon,
+    /// or a thin part one or two tets across) and its stiffness rests on a few bonds. Meshes of
+    /// `perifrac mesh` stay under it (99th percentiles 2.8 to 6.2 on the shared surfaces at
+    /// resolution 20), while their largest factors, on a few corner slivers, reach 12 to 31.
     pub const CORRECTION_WARNING: f64 = 10.0;
-    /// ... or when the largest factor passes this: that particle rings at about the square
-    /// root of it times the frequency of a full family, and sets the stable step alone.
+    /// ... or when any passes this: that particle rings at about the square root of it times
+    /// the frequency of a full family, and sets the stable step alone.
     pub const CORRECTION_WARNING_MAX: f64 = 100.0;
 }
 
@@ -149,8 +148,8 @@ pub struct SetupInfo {
     pub model: &'static str,
     /// The integrator (`"explicit"`, `"implicit"`).
     pub integrator: &'static str,
-    /// How far Chen's constants stray from MODEL.md's (`None` for Xu's model): the factors
-    /// on the dilatation weights (per bond) and on `b` (per particle).
+    /// How far Chen's constants stray from MODEL.md's (`None` for Xu's model): per particle,
+    /// the largest factor on its dilatation weights and the factor on `b`.
     pub correction: Option<Correction>,
     /// The work estimate the run was checked against: memory from the counted bonds, steps,
     /// output and wall time.
