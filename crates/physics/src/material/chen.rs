@@ -43,7 +43,8 @@ pub struct ChenOptions {
     /// homogeneous small strain gives `theta_i = tr(eps)` on every particle, cut families
     /// included (the scalar `c_i` gets only the trace right: on unevenly cut families it reads
     /// shear as volume change). The deviatoric weights stay `omega_ij`, with `b_i` as
-    /// `calibrated` says. Needs per-bond weights (8 bytes a bond, twice with anisotropy).
+    /// `calibrated` says. Costs 16 bytes a bond (the weights and the fitted ones) and the
+    /// 4-byte reverse index, and about 1.5 times a step (docs/DECISIONS.md).
     pub fitted_dilatation: bool,
 }
 
