@@ -63,9 +63,9 @@ fn fitted_dilatation_reads_every_homogeneous_strain_on_every_particle() {
             );
             // The strain gives extensions of ~1e-6 r: the fit reproduces them up to the
             // linearisation of |F X| (relative ~1e-6) and the rounding of lengths of ~1e-2 m
-            // (1e-18 m against 1e-8 m extensions): measured up to 2e-6.
+            // (1e-18 m against 1e-8 m extensions): measured up to 1.1e-6.
             assert!(a < 2e-5, "{name}: {a}");
-            // the scalar calibration reads corners' shear as volume change: measured 0.3 to 1.1
+            // the scalar calibration reads corners' shear as volume change: measured 0.48 to 0.92
             assert!(b > 0.1, "{name}: {b}");
         }
     }
@@ -103,6 +103,11 @@ fn fitted_moduli_study() {
             let m = ChenModel::with_options(disc, &[mat], fitted()).unwrap();
             let (e, n) = tension(m, size, nu, 200e9, 7800.0);
             eprintln!("{cells:?} nu0 {nu}: fitted E/E0 {e:.4} nu {n:.4}");
+            if cells[1] == 8 {
+                // issue 18's targets at 8 cells across: E within 3%, nu within 0.02 (measured
+                // E/E0 1.0009 / 1.0020 / 1.0042, nu 0.088 / 0.237 / 0.389)
+                assert!((e - 1.0).abs() < 0.03 && (n - nu).abs() < 0.02, "{e} {n}");
+            }
         }
     }
 }

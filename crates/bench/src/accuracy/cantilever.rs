@@ -185,18 +185,19 @@ pub fn cantilever(
         "observed order",
         "sideways / vertical tip deflection",
     ]);
+    // cells along, from the resolution "NXxNxN"
+    let cells = |run: &Run| {
+        run.resolution
+            .split('x')
+            .next()
+            .and_then(|c| c.parse::<f64>().ok())
+            .unwrap_or(f64::NAN)
+    };
     for (i, r) in pd.iter().enumerate() {
         let prev = i
             .checked_sub(1)
             .map(|j| pd[j])
             .filter(|p| p.method == r.method && p.horizon_factor == r.horizon_factor);
-        let cells = |run: &Run| {
-            run.resolution
-                .split('x')
-                .next()
-                .and_then(|c| c.parse::<f64>().ok())
-                .unwrap_or(f64::NAN)
-        };
         let order = match prev {
             Some(p) if p.error != 0.0 && r.error != 0.0 => format!(
                 "{:.2}",

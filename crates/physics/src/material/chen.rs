@@ -107,6 +107,19 @@ pub struct ChenModel {
     scratch: Vec<f64>,
 }
 
+/// Particle `i`'s discrete family moments `(sum_j omega r V_j, sum_j omega r^2 V_j)` over its
+/// rest bonds, with the per-bond weights `w` when given (`delta / r` otherwise).
+fn family_moments(disc: &Discretization, w: Option<&[f64]>, i: usize) -> (f64, f64) {
+    let fam = disc.family();
+    let delta = disc.horizon();
+    fam.range(i).fold((0.0, 0.0), |(m1, m2), k| {
+        let r = fam.rest_lengths()[k];
+        let wk = w.map_or(delta / r, |w| w[k]);
+        let wv = wk * disc.volumes()[fam.neighbours()[k] as usize];
+        (m1 + wv * r, m2 + wv * r * r)
+    })
+}
+
 /// Binds `$w` (weights) and `$d` (damage mask) to concrete view types and expands `$body` once
 /// per combination, so every bond loop is monomorphised.
 macro_rules! with_wd {
@@ -197,16 +210,8 @@ impl ChenModel {
             }
             w
         });
-        // discrete family moments sum_j omega r V and sum_j omega r^2 V
         let moments: Vec<(f64, f64)> = (0..n)
-            .map(|i| {
-                fam.range(i).fold((0.0, 0.0), |(m1, m2), k| {
-                    let r = fam.rest_lengths()[k];
-                    let w = weights.as_ref().map_or(delta / r, |w| w[k]);
-                    let wv = w * disc.volumes()[fam.neighbours()[k] as usize];
-                    (m1 + wv * r, m2 + wv * r * r)
-                })
-            })
+            .map(|i| family_moments(&disc, weights.as_deref(), i))
             .collect();
         let c0 = 9.0 / (4.0 * PI * delta.powi(4));
         let c_theta: Vec<f64> = (0..n)
@@ -374,28 +379,14 @@ impl ChenModel {
     /// `b_i / b0` per particle: `pi delta^5 / sum_j omega_ij r_ij^2 V_j` calibrated, 1 without.
     fn deviatoric_factors(&self) -> Vec<f64> {
         let s = &self.setup;
-        let fam = s.disc.family();
-        let delta = s.disc.horizon();
-        let m0 = PI * delta.powi(5);
-        (0..fam.len())
-            .map(|i| {
-                if !s.options.calibrated {
-                    return 1.0;
-                }
-                let m2: f64 = fam
-                    .range(i)
-                    .map(|k| {
-                        let r = fam.rest_lengths()[k];
-                        let w = s.weights.as_ref().map_or(delta / r, |w| w[k]);
-                        w * r * r * s.disc.volumes()[fam.neighbours()[k] as usize]
-                    })
-                    .sum();
-                if m2 > 0.0 {
-                    m0 / m2
-                } else {
-                    1.0
-                }
-            })
+        let m0 = PI * s.disc.horizon().powi(5);
+        (0..s.disc.len())
+            .map(
+                |i| match family_moments(&s.disc, s.weights.as_deref(), i).1 {
+                    m2 if s.options.calibrated && m2 > 0.0 => m0 / m2,
+                    _ => 1.0,
+                },
+            )
             .collect()
     }
 

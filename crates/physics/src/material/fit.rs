@@ -17,7 +17,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::family::Family;
-use crate::math::Vec3;
+use crate::math::{sub, Vec3};
 use crate::par::map_particles;
 
 /// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
@@ -33,6 +33,13 @@ fn mandel(n: Vec3) -> [f64; 6] {
         s * n[0] * n[2],
         s * n[0] * n[1],
     ]
+}
+
+/// The rest direction of bond `k` from particle `i` (unit).
+#[inline]
+fn rest_direction(fam: &Family, x: &[Vec3], i: usize, k: usize) -> Vec3 {
+    let (j, r) = (fam.neighbours()[k] as usize, fam.rest_lengths()[k]);
+    sub(x[j], x[i]).map(|c| c / r)
 }
 
 /// Solves `a x = b` for a symmetric positive definite 6 x 6 `a` by Cholesky; `None` when a
@@ -91,16 +98,8 @@ pub(crate) fn fit_tensors(
         let scalar = [c[i], c[i], c[i], 0.0, 0.0, 0.0];
         let mut a = [[0.0; 6]; 6];
         for k in fam.range(i) {
-            let j = nb[k] as usize;
-            let r = rl[k];
-            let xi = x[j];
-            let n = [
-                (xi[0] - x[i][0]) / r,
-                (xi[1] - x[i][1]) / r,
-                (xi[2] - x[i][2]) / r,
-            ];
-            let q = mandel(n);
-            let s = w[k] * r * vol[j];
+            let q = mandel(rest_direction(fam, x, i, k));
+            let s = w[k] * rl[k] * vol[nb[k] as usize];
             for p in 0..6 {
                 for t in 0..=p {
                     a[p][t] += s * q[p] * q[t];
@@ -135,21 +134,12 @@ pub(crate) fn dilatation_weights(
     c: &[f64],
     bound: f64,
 ) -> Vec<f64> {
-    let nb = fam.neighbours();
-    let rl = fam.rest_lengths();
     let mut d = vec![0.0; fam.num_bonds()];
     for i in 0..fam.len() {
         let range = fam.range(i);
         let mut worst: f64 = 0.0;
         for k in range.clone() {
-            let j = nb[k] as usize;
-            let r = rl[k];
-            let n = [
-                (x[j][0] - x[i][0]) / r,
-                (x[j][1] - x[i][1]) / r,
-                (x[j][2] - x[i][2]) / r,
-            ];
-            let q = mandel(n);
+            let q = mandel(rest_direction(fam, x, i, k));
             let g = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
             d[k] = g;
             worst = worst.max((g - 1.0).abs());
