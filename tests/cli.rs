@@ -56,6 +56,36 @@ fn mesh_box_then_info_reports_what_was_built() {
 }
 
 #[test]
+fn a_mirrored_box_has_the_lattice_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("slab.mesh");
+    let o = out.to_str().unwrap();
+    ok(&[
+        "mesh",
+        "box:1x0.2x0.5",
+        "--resolution",
+        "10",
+        "--mirrored",
+        "-o",
+        o,
+    ]);
+    // The same cells, tets and edge lengths as the Kuhn lattice above (a mirror keeps one
+    // diagonal per cell face and one per cell); conforming, so the same boundary.
+    let info = info_json(&out);
+    assert_eq!(info["tets"], 600);
+    assert_eq!(info["boundary_faces"], 320);
+    assert_eq!(info["pieces"], 1);
+    assert_eq!(info["inverted_fixed"], 0);
+    let err = fails(&["mesh", "box:1x1x1", "--mirrored", "--unstructured", "-o", o]);
+    assert!(
+        err.contains("--unstructured") || err.contains("--mirrored"),
+        "{err}"
+    );
+    let err = fails(&["mesh", "sphere:1", "--mirrored", "-o", o]);
+    assert!(err.contains("--mirrored"), "{err}");
+}
+
+#[test]
 fn info_human_summary_names_the_counts() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("bar.vtk");

@@ -76,7 +76,9 @@ fn make_run(dir: &Path) {
             // A time with the rounding noise of summed steps, as a run writes it.
             "index": index, "time": 0.005000000000000044 * index as f64,
             "surface": ply, "povray": include, "particles": null,
-            "balls": [{"center": [0.5, -0.3, 0.6], "radius": 0.1}],
+            // a ball, and a press plate (a ball far larger than the box) just above it
+            "balls": [{"center": [0.5, -0.3, 0.6], "radius": 0.1},
+                      {"center": [0.5, 0.25, 100.6], "radius": 100.0}],
             "bounds": {"min": min, "max": max},
             "fragments": 2, "broken_bonds": broken.len(),
             "a_field_added_later": true
@@ -135,7 +137,15 @@ fn writes_one_pov_per_frame_including_its_mesh() {
                 .any(|l| l.starts_with("plane {") && l.contains("checker")),
             "the ground"
         );
-        assert!(pov.contains("sphere {"), "the ball");
+        // the ball solid, the plate see-through and shadowless, or it would hide the box
+        let spheres: Vec<&str> = pov.lines().filter(|l| l.starts_with("sphere {")).collect();
+        assert_eq!(spheres.len(), 2, "{pov}");
+        assert!(!spheres[0].contains("transmit"), "{}", spheres[0]);
+        assert!(
+            spheres[1].contains("transmit") && spheres[1].contains("no_shadow"),
+            "{}",
+            spheres[1]
+        );
         assert!(pov.contains("light_source"));
     }
     // The time is shown rounded (issue 17: `t = 0.005000000000000044 s`).

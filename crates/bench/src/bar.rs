@@ -6,7 +6,8 @@ use perifrac_physics::{
     ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel,
     Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
 };
-use perifrac_topology::primitives::box_data;
+use perifrac_topology::mesher::unstructured_box_data;
+use perifrac_topology::primitives::{lattice_box_data, Lattice};
 use perifrac_topology::TetMesh;
 
 use crate::error::BenchError;
@@ -118,17 +119,35 @@ pub(crate) fn mesh_body<T: PdMaterial>(
     Ok(Body { model })
 }
 
-/// The box `[min, max]` in `cells` Kuhn cells as a peridynamic body of `material` with
-/// horizon `k` times the mesh's mean edge length.
-pub(crate) fn body<T: PdMaterial>(
+/// How a bench box is cut into tets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Cut {
+    /// A lattice, six tets a cell.
+    Lattice(Lattice),
+    /// The unstructured mesher's tets from points of this seed, about as many.
+    Unstructured(u64),
+}
+
+/// The box `[min, max]` in `cells` cells, cut as `cut` says, as a peridynamic body of
+/// `material` with horizon `k` times the mesh's mean edge length.
+pub(crate) fn cut_body<T: PdMaterial>(
     case: &str,
     min: Vec3,
     max: Vec3,
     cells: [usize; 3],
     k: f64,
     material: &T,
+    cut: Cut,
 ) -> Result<Body<T::Model>, BenchError> {
-    let (v, t) = box_data(min, max, cells);
+    let (v, t) = match cut {
+        Cut::Lattice(lattice) => lattice_box_data(min, max, cells, lattice),
+        Cut::Unstructured(seed) => {
+            unstructured_box_data(min, max, cells, seed).map_err(|e| BenchError::Mesh {
+                case: case.into(),
+                message: e.to_string(),
+            })?
+        }
+    };
     mesh_body(case, &tet_mesh(case, v, t)?, k, material)
 }
 
@@ -148,8 +167,9 @@ pub(crate) fn clamped_bar<T: PdMaterial>(
     nx: usize,
     k: f64,
     material: &T,
+    cut: Cut,
 ) -> Result<(Body<T::Model>, Vec<u32>), BenchError> {
-    let b = held_bar(case, length, side, nx, k, material, false)?;
+    let b = held_bar(case, length, side, nx, k, material, false, cut)?;
     Ok((b.body, b.clamp))
 }
 
@@ -167,6 +187,8 @@ pub(crate) struct HeldBar<M> {
 /// [`clamped_bar`], with a second layer of the clamp's depth beyond x = `length` when
 /// `end_layer`: the bar proper, 0 < x < `length`, then has a layer one horizon thick at each
 /// end to hold or move, as a finite-element bar's end faces are.
+// The bar's shape, resolution, horizon, material, end layer and mesh are each a case's own.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn held_bar<T: PdMaterial>(
     case: &str,
     length: f64,
@@ -175,18 +197,20 @@ pub(crate) fn held_bar<T: PdMaterial>(
     k: f64,
     material: &T,
     end_layer: bool,
+    cut: Cut,
 ) -> Result<HeldBar<T::Model>, BenchError> {
     let n = cells_across(nx);
     let h = length / nx as f64;
     let clamp = (k * KUHN_EDGE_PER_CELL).ceil() as usize;
     let far = if end_layer { clamp } else { 0 };
-    let body = body(
+    let body = cut_body(
         case,
         [-(clamp as f64) * h, -side / 2.0, -side / 2.0],
         [length + far as f64 * h, side / 2.0, side / 2.0],
         [nx + clamp + far, n, n],
         k,
         material,
+        cut,
     )?;
     let clamp = body.select(|x| x[0] < 0.0);
     let end = if end_layer {
@@ -197,7 +221,8 @@ pub(crate) fn held_bar<T: PdMaterial>(
     Ok(HeldBar { body, clamp, end })
 }
 
-/// A box `[0, size]` of `cells` cells: [`body`] for the cases that start at the origin.
+/// A box `[0, size]` of `cells` cells: [`cut_body`] on the Kuhn lattice, for the cases that
+/// start at the origin.
 pub(crate) fn block<T: PdMaterial>(
     case: &str,
     size: Vec3,
@@ -205,7 +230,8 @@ pub(crate) fn block<T: PdMaterial>(
     k: f64,
     material: &T,
 ) -> Result<Body<T::Model>, BenchError> {
-    body(case, [0.0; 3], size, cells, k, material)
+    let kuhn = Cut::Lattice(Lattice::Kuhn);
+    cut_body(case, [0.0; 3], size, cells, k, material, kuhn)
 }
 
 impl<M: ForceModel> Body<M> {
@@ -303,6 +329,7 @@ pub(crate) fn fit_line(u: &[f64], v: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use perifrac_topology::primitives::box_data;
 
     #[test]
     fn kuhn_edge_ratio_is_bounded() {

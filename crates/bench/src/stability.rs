@@ -245,6 +245,21 @@ fn step_factor(factor: f64, cells: [usize; 3], steps: u64) -> Result<CaseResult,
 /// A scene given as TOML text, stepped through the scene driver: `steps` steps, or to the
 /// scene's end when `None`.
 fn scene_case(name: &str, text: &str, note: &str, damped: bool, steps: Option<u64>) -> CaseResult {
+    run_scene_case(name, text, note, damped, steps, false)
+}
+
+/// [`scene_case`]; with `pressed`, the note also gives how deep any particle's contact sphere
+/// went into a collider over the run (a share of its radius: past 1, its centre went through)
+/// and, when no bond broke, how many pairs of particles within a horizon of each other at rest
+/// lie the other way round at the end (the block folded through itself).
+fn run_scene_case(
+    name: &str,
+    text: &str,
+    note: &str,
+    damped: bool,
+    steps: Option<u64>,
+    pressed: bool,
+) -> CaseResult {
     let started = Instant::now();
     let scene = match Scene::parse(text, Path::new(name)) {
         Ok(s) => s,
@@ -259,6 +274,7 @@ fn scene_case(name: &str, text: &str, note: &str, damped: bool, steps: Option<u6
         energy(d.solver_mut()) + balls
     };
     let mut watch = Watch::new(total(&mut setup.driver), setup.driver.solver().velocities());
+    let mut deepest_in: f64 = 0.0;
     let steps = steps.unwrap_or(setup.frames as u64 * setup.steps_per_frame);
     for _ in 0..steps {
         if let Err(e) = setup.driver.step() {
@@ -273,7 +289,24 @@ fn scene_case(name: &str, text: &str, note: &str, damped: bool, steps: Option<u6
             let e = total(&mut setup.driver);
             watch.energy.push(e);
         }
+        if pressed {
+            deepest_in = deepest_in.max(into_colliders(&setup.driver));
+        }
     }
+    let note = match (pressed, setup.driver.broken_bonds()) {
+        (false, _) => note.into(),
+        // pieces tumble once apart: turned-over pairs say nothing then
+        (true, 0) => format!(
+            "{note}; deepest into the plate or ground {:.0}% of a contact radius, {} of the \
+             pairs within a horizon at rest turned over at the end",
+            100.0 * deepest_in,
+            turned_over(&setup.driver, setup.info.horizon)
+        ),
+        (true, _) => format!(
+            "{note}; deepest into the plate or ground {:.0}% of a contact radius",
+            100.0 * deepest_in
+        ),
+    };
     let note = match setup.driver.self_contact() {
         Some(sc) => {
             let deepest = setup.driver.self_contact_deepest();
@@ -285,9 +318,40 @@ fn scene_case(name: &str, text: &str, note: &str, damped: bool, steps: Option<u6
                 sc.rebuilds()
             )
         }
-        None => note.into(),
+        None => note,
     };
     watch.finish(name, damped, || total(&mut setup.driver), note, started)
+}
+
+/// The deepest any particle's contact sphere reaches into a collider, over its radius.
+fn into_colliders(d: &perifrac_scene::Driver) -> f64 {
+    let Some(c) = d.colliders() else {
+        return 0.0;
+    };
+    let y = d.solver().positions();
+    y.iter()
+        .zip(d.radii())
+        .map(|(&p, &r)| c.penetration(p, r) / r)
+        .fold(0.0, f64::max)
+}
+
+/// Pairs of particles closer than `horizon` (m) at rest whose separation now points against
+/// their rest one (`(y_j - y_i) . (x_j - x_i) < 0`): where a body has folded through itself.
+/// All pairs: for the few thousand particles of a stability case.
+fn turned_over(d: &perifrac_scene::Driver, horizon: f64) -> usize {
+    let x = d.mesh().rest_barycentres();
+    let y = d.solver().positions();
+    use perifrac_physics::math::{dot, sub};
+    let mut count = 0;
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let r = sub(x[j], x[i]);
+            if dot(r, r) < horizon * horizon && dot(sub(y[j], y[i]), r) < 0.0 {
+                count += 1;
+            }
+        }
+    }
+    count
 }
 
 fn refused(name: &str, message: String, started: Instant) -> CaseResult {
@@ -339,39 +403,49 @@ fn sphere_impact(cells: [usize; 3]) -> CaseResult {
     )
 }
 
-/// The top layer of a steel block driven down at 10 m/s to 20% of its height, then let go
+/// A steel block pressed at 10 m/s to 20% of its height between the ground and a press plate
+/// (a kinematic ball of radius 10 m, flat over the block to 0.1 mm), which then stops and holds
 /// for as long again; `brittle` gives the steel a fracture threshold (and so, by default,
-/// contact between its fragments), otherwise contact between particles is asked for.
+/// contact between its fragments), otherwise contact between particles is asked for. Plate
+/// and ground are ten times as stiff as the default contact, so the block's particles stay
+/// within a tenth of a cell of them.
 fn crush(cells: [usize; 3], brittle: bool) -> CaseResult {
     let size = cells.map(|c| c as f64 * 0.01);
     let speed = 10.0;
     let squeeze = 0.8 * size[2] / speed;
+    let radius = 10.0;
     let (material, contact) = match brittle {
         true => ("s_crit = 0.002\n", ""),
         false => ("", "self_contact = true\n"),
     };
     let text = format!(
         "{}{STEEL}{material}\n[simulation]\nduration = {}\ndamping = 0.0\n{contact}\n\
-         [[anchor]]\nregion = {{ min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 0.004] }}\n\
-         [[anchor]]\nregion = {{ min = [-1.0, -1.0, {}], max = [1.0, 1.0, 1.0] }}\n\
-         velocity = [0.0, 0.0, {}]\nuntil = {squeeze}\n\n[output]\nframes = 4\n",
+         [[ground]]\nstiffness_factor = {PRESS_STIFFNESS}\n\n\
+         [[ball]]\ncenter = [{}, {}, {}]\nradius = {radius}\nvelocity = [0.0, 0.0, {}]\n\
+         until = {squeeze}\nstiffness_factor = {PRESS_STIFFNESS}\n\n[output]\nframes = 4\n",
         block_mesh(cells),
         2.0 * squeeze,
-        size[2] - 0.004,
+        size[0] / 2.0,
+        size[1] / 2.0,
+        size[2] + radius,
         -speed,
     );
     let (name, note) = match brittle {
         true => (
-            "crush a brittle steel block to 20% of its height, then release",
-            "as the elastic crush with s_crit = 0.002: it shatters; contact between fragments",
+            "press a brittle steel block to 20% of its height, then hold",
+            "as the elastic press with s_crit = 0.002: it shatters; contact between fragments",
         ),
         false => (
-            "crush a steel block to 20% of its height, then release (self contact)",
-            "top layer driven down at 10 m/s to 20% of the height, then let go for as long again",
+            "press a steel block to 20% of its height, then hold (self contact)",
+            "pressed between the ground and a plate at 10 m/s to 20% of the height, then held \
+             for as long again",
         ),
     };
-    scene_case(name, &text, note, true, None)
+    run_scene_case(name, &text, note, true, None, true)
 }
+
+/// The press plate's and the ground's stiffness over the default contact's, in the crushes.
+const PRESS_STIFFNESS: f64 = 10.0;
 
 fn two_materials(cells: [usize; 3], steps: u64) -> CaseResult {
     let size = cells.map(|c| c as f64 * 0.01);

@@ -67,8 +67,12 @@ enum Command {
         /// Boxes: a Delaunay mesh of well-spaced random points (as many tets as the cells
         /// would give, no direction preferred, as scenes use by default) instead of the Kuhn
         /// lattice.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "mirrored")]
         unstructured: bool,
+        /// Boxes: the Kuhn tets mirrored in every other cell along each axis (a box of even
+        /// counts is mirror-symmetric) instead of the same six tets in every cell.
+        #[arg(long)]
+        mirrored: bool,
         /// Seed of `--unstructured`'s points.
         #[arg(long, requires = "unstructured", default_value_t = 1)]
         seed: u64,
@@ -111,6 +115,7 @@ fn main() -> ExitCode {
             edge_length,
             tetgen,
             unstructured,
+            mirrored,
             seed,
             allow_large,
         } => mesh::run(
@@ -122,6 +127,7 @@ fn main() -> ExitCode {
                 edge_length,
                 tetgen,
                 unstructured: unstructured.then_some(seed),
+                mirrored,
                 allow_large,
             },
         ),

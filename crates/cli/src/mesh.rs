@@ -45,6 +45,8 @@ pub struct MeshArgs<'a> {
     pub tetgen: bool,
     /// Boxes only: unstructured tets from points of this seed instead of the Kuhn lattice.
     pub unstructured: Option<u64>,
+    /// Boxes only: the mirrored Kuhn lattice ([`primitives::Lattice::Mirrored`]).
+    pub mirrored: bool,
     /// Go on when the estimated memory passes what is available.
     pub allow_large: bool,
 }
@@ -62,8 +64,8 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         if args.cells.is_some() {
             bail!("--cells applies to primitives only; use --resolution or --edge-length");
         }
-        if args.unstructured.is_some() {
-            bail!("--unstructured applies to box primitives only");
+        if args.unstructured.is_some() || args.mirrored {
+            bail!("--unstructured and --mirrored apply to box primitives only");
         }
         return if args.tetgen {
             run_tetgen(path, output)
@@ -72,8 +74,8 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         };
     }
     if let Some((vertices, faces)) = parse_round(input)? {
-        if args.cells.is_some() || args.tetgen || args.unstructured.is_some() {
-            bail!("--cells, --tetgen and --unstructured do not apply to `{input}`");
+        if args.cells.is_some() || args.tetgen || args.unstructured.is_some() || args.mirrored {
+            bail!("--cells, --tetgen, --unstructured and --mirrored do not apply to `{input}`");
         }
         return mesh_and_write(&vertices, &faces, input, output, args);
     }
@@ -86,6 +88,7 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         args.resolution.unwrap_or(DEFAULT_PRIMITIVE_RESOLUTION),
         args.cells,
         args.unstructured,
+        args.mirrored,
         args.allow_large,
     )
 }
@@ -278,6 +281,7 @@ fn run_primitive(
     resolution: usize,
     cells: Option<&[usize]>,
     unstructured: Option<u64>,
+    mirrored: bool,
     allow_large: bool,
 ) -> Result<()> {
     let prim = parse_primitive(spec)?;
@@ -290,6 +294,11 @@ fn run_primitive(
     check_memory(tets as u64, vertices as u64, allow_large)?;
     let format = TetFormat::from_path(output)?;
     let mesh = match unstructured {
+        None if mirrored => {
+            let lattice = primitives::Lattice::Mirrored;
+            let (v, t) = primitives::lattice_box_data([0.0; 3], prim.size, counts, lattice);
+            TetMesh::new(v, t).with_context(what)?.0
+        }
         None => primitives::try_box_mesh([0.0; 3], prim.size, counts).with_context(what)?,
         Some(seed) => {
             let (v, t) =
@@ -349,7 +358,8 @@ mod tests {
                 "more than a mesh can index",
             ),
         ] {
-            let e = run_primitive(spec, &out, 20, cells.as_deref(), None, false).unwrap_err();
+            let e =
+                run_primitive(spec, &out, 20, cells.as_deref(), None, false, false).unwrap_err();
             let msg = format!("{e:#}");
             assert!(msg.contains(spec) && msg.contains(expect), "{spec}: {msg}");
             assert!(!out.exists());

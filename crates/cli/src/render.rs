@@ -28,6 +28,10 @@ const FOV_DEG: f64 = 40.0;
 const CAMERA_AZIMUTH_DEG: f64 = 50.0;
 /// Camera elevation above the horizontal plane through the target, degrees.
 const CAMERA_ELEVATION_DEG: f64 = 25.0;
+/// A ball whose radius passes this many times the framed extent is drawn see-through (a press
+/// plate: flat over the object, it would otherwise fill the picture).
+const PLATE_RADIUS: f64 = 20.0;
+
 /// Fraction of the half-width and half-height of the picture the bounds may fill.
 const FILL: f64 = 0.85;
 /// Lines of `povray` output quoted when it fails.
@@ -632,9 +636,18 @@ fn scene_text(
         );
     }
     for b in &frame.balls {
+        // A ball far larger than the view is a press plate over the object, and a camera
+        // inside a ball sees nothing else: see-through, no shadow, or it would hide the object.
+        let d = sub(view.location, b.center);
+        let inside = dot(d, d) < b.radius * b.radius;
+        let (see_through, shadow) = if inside || b.radius > PLATE_RADIUS * view.extent {
+            (" transmit 0.8", " no_shadow")
+        } else {
+            ("", "")
+        };
         let _ = writeln!(
             w,
-            "sphere {{ {}, {} texture {{ pigment {{ rgb <0.55, 0.57, 0.60> }} finish {{ ambient 0.05 diffuse 0.55 specular 0.8 roughness 0.01 metallic reflection {{ 0.25 metallic }} }} }} }}",
+            "sphere {{ {}, {} texture {{ pigment {{ rgb <0.55, 0.57, 0.60>{see_through} }} finish {{ ambient 0.05 diffuse 0.55 specular 0.8 roughness 0.01 metallic reflection {{ 0.25 metallic }} }} }}{shadow} }}",
             pov(b.center),
             b.radius
         );

@@ -303,6 +303,26 @@ impl Colliders {
         self.balls.len()
     }
 
+    /// Stops kinematic ball `i` where it is (a press that has reached its depth): its velocity
+    /// becomes zero and it holds from the next step on. Stopping it again changes nothing.
+    /// An error for a dynamic ball (it moves under its forces) or an index out of range.
+    pub fn stop_ball(&mut self, i: usize) -> Result<(), ContactError> {
+        match self.balls.get_mut(i) {
+            Some(b) if b.mass.is_none() => {
+                b.velocity = [0.0; 3];
+                Ok(())
+            }
+            Some(_) => Err(ContactError::CannotStop {
+                ball: format!("ball {i}"),
+                reason: "a dynamic ball moves under its forces and cannot be stopped".into(),
+            }),
+            None => Err(ContactError::CannotStop {
+                ball: format!("ball {i}"),
+                reason: format!("there are {} balls", self.balls.len()),
+            }),
+        }
+    }
+
     /// Number of ground planes.
     pub fn num_grounds(&self) -> usize {
         self.grounds.len()

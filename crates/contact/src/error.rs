@@ -93,6 +93,14 @@ pub enum ContactError {
         /// The offending value.
         value: f64,
     },
+    /// [`crate::Colliders::stop_ball`] was asked to stop a ball that cannot be stopped.
+    #[error("{ball}: {reason}")]
+    CannotStop {
+        /// The ball, e.g. `"ball 0"`.
+        ball: String,
+        /// Why not.
+        reason: String,
+    },
     /// Self contact was given inconsistent inputs (array lengths).
     #[error("self contact: {0}")]
     BadSelfContact(String),

@@ -66,6 +66,9 @@ pub struct Driver {
     /// Anchors to release, sorted by time.
     releases: Releases,
     next_release: usize,
+    /// Kinematic balls to stop, as (time in s, ball), sorted by time.
+    ball_stops: Vec<(f64, usize)>,
+    next_stop: usize,
     broken_bonds: u64,
     crack_faces: u64,
     /// Self contact: the deepest overlap so far and the last step's statistics.
@@ -96,6 +99,8 @@ impl Driver {
             radii,
             releases,
             next_release: 0,
+            ball_stops: Vec::new(),
+            next_stop: 0,
             broken_bonds: 0,
             crack_faces: 0,
             self_deepest: SelfContactStats::default(),
@@ -105,10 +110,18 @@ impl Driver {
         }
     }
 
+    /// Kinematic balls to stop, as (time in s, ball index; checked by the setup).
+    pub(crate) fn with_ball_stops(mut self, mut stops: Vec<(f64, usize)>) -> Driver {
+        stops.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.ball_stops = stops;
+        self
+    }
+
     /// Advances one time step. On an instability the error is returned and the state is that
     /// of the failed step.
     pub fn step(&mut self) -> Result<StepReport, PhysicsError> {
         self.release_anchors();
+        self.stop_balls();
         let Driver {
             mesh,
             solver,
@@ -181,6 +194,23 @@ impl Driver {
             // The indices were checked when the anchors were made.
             let _ = self.solver.loads_mut().release(particles);
             self.next_release += 1;
+        }
+    }
+
+    /// Stops the kinematic balls whose stop time falls within half a step of now (the anchors'
+    /// rule). A checkpoint keeps the balls' velocities, so a resumed run starts the list again
+    /// and stops the balls already stopped once more, which changes nothing.
+    fn stop_balls(&mut self) {
+        let now = self.solver.time() + 0.5 * self.solver.dt();
+        while let Some(&(t, ball)) = self.ball_stops.get(self.next_stop) {
+            if t > now {
+                break;
+            }
+            if let Some(c) = self.colliders.as_mut() {
+                // The setup made these balls kinematic and in range.
+                let _ = c.stop_ball(ball);
+            }
+            self.next_stop += 1;
         }
     }
 
@@ -323,6 +353,7 @@ impl Driver {
             .into());
         }
         self.next_release = next;
+        self.next_stop = 0;
         self.broken_bonds = r.u64("broken bonds")?;
         self.crack_faces = r.u64("crack faces")?;
         let mut secs = [0.0; 5];

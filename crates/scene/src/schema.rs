@@ -56,7 +56,8 @@ pub struct MeshSpec {
     pub cells: Option<[usize; 3]>,
     /// How a box is cut into tets: `"unstructured"` (default: a Delaunay mesh of well-spaced
     /// random points, as many tets as the cells would give, no direction preferred) or
-    /// `"lattice"` (every cell into the same six Kuhn tets).
+    /// `"lattice"` (every cell into the same six Kuhn tets) or `"mirrored"` (the Kuhn tets
+    /// mirrored in every other cell along each axis: a box of even counts is mirror-symmetric).
     pub structure: Option<String>,
     /// Seed of an unstructured box's points (default 1): another seed, another mesh of the
     /// same size.
@@ -234,6 +235,9 @@ pub struct BallSpec {
     pub radius: f64,
     /// Velocity (m/s): constant for a kinematic ball, initial for a dynamic one.
     pub velocity: Option<[f64; 3]>,
+    /// Time (s) at which a kinematic ball stops and holds where it is (a press at its depth),
+    /// default never; not for a dynamic ball.
+    pub until: Option<f64>,
     /// Mass (kg): the ball is dynamic (gravity, reactions) when a mass or density is given.
     pub mass: Option<f64>,
     /// Density (kg/m^3), the alternative to `mass`.

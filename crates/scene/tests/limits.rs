@@ -357,6 +357,58 @@ fn self_contact_keys_are_checked() {
 }
 
 #[test]
+fn a_kinematic_ball_stops_at_its_time_and_holds() {
+    // A plate-like ball coming down at 1 m/s onto the cube, stopped at 2e-5 s: 20 um of travel
+    // and no more, whatever the particles push (it is kinematic).
+    let press = TINY.replace("duration = 1e-4", "duration = 6e-5")
+        + "\n[[ball]]\ncenter = [0.05, 0.05, 10.1005]\nradius = 10.0\n\
+           velocity = [0.0, 0.0, -1.0]\nuntil = 2e-5\n";
+    let speed = 1.0;
+    let mut s = Setup::with_limits(&scene(&press), None, &limits()).unwrap();
+    let z0 = s.driver.colliders().unwrap().ball(0).center[2];
+    let dt = s.driver.solver().dt();
+    while s.driver.solver().time() < 6e-5 {
+        s.driver.step().unwrap();
+    }
+    let ball = s.driver.colliders().unwrap().ball(0);
+    let travel = z0 - ball.center[2];
+    // stopped at the first step whose midpoint passes 2e-5 s: within a step of 20 um of travel
+    assert!(
+        (travel - 2e-5).abs() <= speed * dt + 1e-15,
+        "{travel} m, dt {dt} s"
+    );
+    assert_eq!(ball.velocity, [0.0; 3]);
+    // a dynamic ball moves under its forces: `until` is refused there, naming the key
+    let e = refusal(&press.replace("until = 2e-5", "until = 2e-5\nmass = 1.0"));
+    assert!(e.to_string().contains("ball[0].until"), "{e}");
+    let e = refusal(&press.replace("until = 2e-5", "until = -1.0"));
+    assert!(e.to_string().contains("ball[0].until"), "{e}");
+}
+
+#[test]
+fn a_box_is_cut_as_its_structure_says() {
+    let with = |structure: &str| {
+        TINY.replace(
+            "cells = [2, 2, 2]",
+            &format!("cells = [2, 2, 2]\nstructure = \"{structure}\""),
+        )
+    };
+    // Both lattices cut each of the 8 cells into 6 tets, one particle each; a seed belongs to
+    // unstructured boxes only.
+    for structure in ["lattice", "mirrored"] {
+        let s = Setup::with_limits(&scene(&with(structure)), None, &limits()).unwrap();
+        assert_eq!(s.info.particles, 48, "{structure}");
+    }
+    let e = refusal(&with("mirrored").replace("[[material]]", "seed = 3\n\n[[material]]"));
+    assert!(e.to_string().contains("mesh.seed"), "{e}");
+    let e = refusal(&with("mirror")).to_string();
+    assert!(
+        e.contains("mesh.structure") && e.contains("mirrored"),
+        "{e}"
+    );
+}
+
+#[test]
 fn the_correction_key_is_checked_and_reported() {
     let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
     let e = refusal(&with("correction = \"best\"")).to_string();

@@ -132,6 +132,12 @@ fn bad_thickness_material_and_placement_are_refused_by_key() {
             "surface = \"torus\"",
             "shell.surface",
         ),
+        // shell scenes do not stop balls
+        (
+            "[[ground]]",
+            "[[ball]]\ncenter = [0.0, 0.0, 1.0]\nradius = 0.1\nuntil = 0.1\n\n[[ground]]",
+            "ball[0].until",
+        ),
         // the shell starts through the ground
         (
             "translate = [0.0, 0.0, 0.02928]",

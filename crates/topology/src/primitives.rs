@@ -23,6 +23,30 @@ const KUHN: [[usize; 4]; 6] = [
 /// The counts are not checked here: call [`box_counts`] (or [`check_box`]) first for counts
 /// that come from a user.
 pub fn box_data(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
+    lattice_box_data(min, max, cells, Lattice::Kuhn)
+}
+
+/// How a lattice box's cells are cut into six tets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Lattice {
+    /// Every cell the same six Kuhn tets along its main diagonal (the same direction everywhere:
+    /// the lattice has no mirror symmetry, and a bar bent down also bends a little sideways).
+    #[default]
+    Kuhn,
+    /// Each cell's Kuhn tets mirrored along every axis whose cell index is odd, so neighbouring
+    /// cells are mirror images across their shared face (which the mirror maps to itself, so
+    /// the cells still agree on its diagonal). A box with an even count of cells along an axis
+    /// is then mirror-symmetric across its mid-plane normal to that axis.
+    Mirrored,
+}
+
+/// [`box_data`] with the cells cut as `lattice` says. Vertices are numbered the same way.
+pub fn lattice_box_data(
+    min: [f64; 3],
+    max: [f64; 3],
+    cells: [usize; 3],
+    lattice: Lattice,
+) -> (Vec<[f64; 3]>, Vec<[u32; 4]>) {
     let [nx, ny, nz] = cells.map(|c| c.max(1));
     let index = |i: usize, j: usize, k: usize| (i + (nx + 1) * (j + (ny + 1) * k)) as u32;
     let mut vertices = Vec::with_capacity((nx + 1) * (ny + 1) * (nz + 1));
@@ -39,9 +63,22 @@ pub fn box_data(min: [f64; 3], max: [f64; 3], cells: [usize; 3]) -> (Vec<[f64; 3
     for k in 0..nz {
         for j in 0..ny {
             for i in 0..nx {
-                let corner = |b: usize| index(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1));
+                // Corner bits flipped along the mirrored axes; an odd count of flips turns the
+                // tets inside out, so their last two corners swap back.
+                let flip = match lattice {
+                    Lattice::Kuhn => 0,
+                    Lattice::Mirrored => (i & 1) | (j & 1) << 1 | (k & 1) << 2,
+                };
+                let corner = |b: usize| {
+                    let b = b ^ flip;
+                    index(i + (b & 1), j + ((b >> 1) & 1), k + ((b >> 2) & 1))
+                };
                 for kuhn in KUHN {
-                    tets.push(kuhn.map(corner));
+                    let mut tet = kuhn.map(corner);
+                    if flip.count_ones() % 2 == 1 {
+                        tet.swap(2, 3);
+                    }
+                    tets.push(tet);
                 }
             }
         }
@@ -217,6 +254,47 @@ fn bar_layout(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mirrored_lattice_is_conforming_and_symmetric() {
+        let cells = [4, 2, 3];
+        let (v, t) = lattice_box_data([-2.0, -1.0, 0.0], [2.0, 1.0, 3.0], cells, Lattice::Mirrored);
+        let (mesh, report) = TetMesh::new(v.clone(), t.clone()).unwrap();
+        // Every tet built positive, and the only boundary faces are the box's own: two
+        // triangles per boundary cell face (a mismatched diagonal inside would add four).
+        assert_eq!(report.inverted_fixed, 0);
+        let [nx, ny, nz] = cells;
+        assert_eq!(
+            mesh.boundary_face_count(),
+            4 * (nx * ny + ny * nz + nz * nx)
+        );
+        let volume: f64 = mesh.rest_volumes().iter().sum();
+        assert!((volume - 4.0 * 2.0 * 3.0).abs() < 1e-12, "{volume}");
+        // Even counts along x and y: the tets, as sets of corners, map onto themselves under
+        // the mirror x -> -x and under y -> -y (z has an odd count and no such symmetry).
+        let key = |p: [f64; 3]| p.map(|c| (c * 1e6).round() as i64);
+        let as_set = |tets: &[[u32; 4]], mirror: [f64; 3]| {
+            let mut s: Vec<[[i64; 3]; 4]> = tets
+                .iter()
+                .map(|tet| {
+                    let mut c = tet.map(|i| {
+                        let p = v[i as usize];
+                        key([p[0] * mirror[0], p[1] * mirror[1], p[2] * mirror[2]])
+                    });
+                    c.sort();
+                    c
+                })
+                .collect();
+            s.sort();
+            s
+        };
+        let same = as_set(&t, [1.0; 3]);
+        assert_eq!(as_set(&t, [-1.0, 1.0, 1.0]), same);
+        assert_eq!(as_set(&t, [1.0, -1.0, 1.0]), same);
+        // The Kuhn lattice has neither symmetry.
+        let (_, kuhn) = box_data([-2.0, -1.0, 0.0], [2.0, 1.0, 3.0], cells);
+        assert_ne!(as_set(&kuhn, [1.0, -1.0, 1.0]), as_set(&kuhn, [1.0; 3]));
+    }
 
     #[test]
     fn counts_are_checked_not_wrapped() {

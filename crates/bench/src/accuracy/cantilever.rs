@@ -18,11 +18,14 @@ use super::{
     clamped_fem_bar, material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH,
     POISSON, SIDE, YOUNG,
 };
-use crate::bar::{cells_across, clamped_bar, fit_line, rest_of, FittedChen};
+use crate::bar::{cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen};
 use crate::table::Table;
 use crate::{BenchError, Effort};
+use perifrac_topology::primitives::Lattice;
 
 const GRAVITY: f64 = 9.81;
+/// Seed of the unstructured bars' points (the scenes' default).
+const UNSTRUCTURED_SEED: u64 = 1;
 /// Euler-Bernoulli tip deflection `q L^4 / (8 E I)` (m), quoted in issue 6.
 pub const EULER_BERNOULLI: f64 = 0.014715;
 /// Timoshenko tip deflection (m), quoted in issue 6.
@@ -36,19 +39,29 @@ fn omega1() -> f64 {
     1.875104f64.powi(2) * (YOUNG * i / (DENSITY * SIDE * SIDE * LENGTH.powi(4))).sqrt()
 }
 
+/// The name of a peridynamic series: the correction and the mesh.
+fn series(fitted: bool, cut: Cut) -> String {
+    let mesh = match cut {
+        Cut::Lattice(Lattice::Kuhn) => "",
+        Cut::Lattice(Lattice::Mirrored) => " mirrored",
+        Cut::Unstructured(_) => " unstructured",
+    };
+    format!("PD{}{mesh}", if fitted { " fitted" } else { "" })
+}
+
 /// Tip deflection (m) by peridynamics with `nx` cells along the bar and horizon factor `k`
-/// (with the fitted dilatation when `fitted`), the relative change over the last tenth of the
-/// relaxation and the tip's sideways deflection over its vertical one.
-fn peridynamics(nx: usize, k: f64, fitted: bool) -> Result<(Run, f64, f64), BenchError> {
+/// (with the fitted dilatation when `fitted`) on the mesh `cut`, the relative change over the
+/// last tenth of the relaxation and the tip's sideways deflection over its vertical one.
+fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, f64), BenchError> {
     let started = Instant::now();
     let n = cells_across(nx);
     let h = LENGTH / nx as f64;
     let case = format!("cantilever PD {nx}x{n}x{n} k={k}");
     let m = material(&case)?;
     let (b, held) = if fitted {
-        clamped_bar(&case, LENGTH, SIDE, nx, k, &FittedChen(m))?
+        clamped_bar(&case, LENGTH, SIDE, nx, k, &FittedChen(m), cut)?
     } else {
-        clamped_bar(&case, LENGTH, SIDE, nx, k, &m)?
+        clamped_bar(&case, LENGTH, SIDE, nx, k, &m, cut)?
     };
     let bonds = b.bonds();
     let tip = b.select(|x| x[0] > LENGTH - 2.0 * h);
@@ -86,7 +99,7 @@ fn peridynamics(nx: usize, k: f64, fitted: bool) -> Result<(Run, f64, f64), Benc
     let value = deflection(&s);
     let sideways = tip_at(&s, 1).abs() / value;
     let run = Run {
-        method: if fitted { "PD fitted" } else { "PD" }.into(),
+        method: series(fitted, cut),
         value,
         ..Run::peridynamics([nx, n, n], k, started, steps, bonds)
     };
@@ -151,20 +164,30 @@ pub fn cantilever(
         runs.push(finite_elements(nx, false)?);
     }
     let mut residual: f64 = 0.0;
-    // (k, fitted): the default calibration at every factor, the fitted dilatation at 1.5
-    let variants: Vec<(f64, bool)> = factors
+    // (k, fitted, mesh): the default calibration at every factor, then at 1.5 the fitted
+    // dilatation and both on the mirrored lattice and on unstructured tets
+    let kuhn = Cut::Lattice(Lattice::Kuhn);
+    let mirrored = Cut::Lattice(Lattice::Mirrored);
+    let unstructured = Cut::Unstructured(UNSTRUCTURED_SEED);
+    let variants: Vec<(f64, bool, Cut)> = factors
         .iter()
-        .map(|&k| (k, false))
-        .chain(std::iter::once((1.5, true)))
+        .map(|&k| (k, false, kuhn))
+        .chain([
+            (1.5, true, kuhn),
+            (1.5, false, mirrored),
+            (1.5, true, mirrored),
+            (1.5, false, unstructured),
+            (1.5, true, unstructured),
+        ])
         .collect();
     let mut sideways = Vec::new();
-    for &(k, fitted) in &variants {
+    for &(k, fitted, cut) in &variants {
         for &nx in pd_levels {
-            let tag = if fitted { " fitted" } else { "" };
             progress(&format!(
-                "cantilever: peridynamics{tag} at {nx} cells along, k = {k}"
+                "cantilever: {} at {nx} cells along, k = {k}",
+                series(fitted, cut)
             ));
-            let (run, r, side) = peridynamics(nx, k, fitted)?;
+            let (run, r, side) = peridynamics(nx, k, fitted, cut)?;
             residual = residual.max(r);
             sideways.push(side);
             runs.push(run);
@@ -230,10 +253,15 @@ pub fn cantilever(
          bending mode, 12 time constants, a clamp layer one horizon thick behind x = 0); the \
          tip moved by at most {:.1e} of itself over the last tenth of the relaxation. \
          \"PD fitted\" rows fit each particle's dilatation weights to read every homogeneous \
-         strain exactly (`correction = \"fitted\"`, docs/DECISIONS.md). The second table gives \
-         each series' observed order (the error's log ratio over the refinement's) and the \
-         tip's sideways deflection over its vertical one (the Kuhn lattice has no mirror \
-         symmetry across the bar).",
+         strain exactly (`correction = \"fitted\"`, docs/DECISIONS.md). Rows without a mesh \
+         named are on the Kuhn lattice (every cell the same six tets); \"mirrored\" rows cut \
+         every other cell along each axis as the mirror image of its neighbour \
+         (`structure = \"mirrored\"`), \"unstructured\" rows are the scenes' default mesh \
+         (Delaunay tets of well-spaced random points, seed {UNSTRUCTURED_SEED}, as many tets). \
+         The second table gives each series' observed order (the error's log ratio over the \
+         refinement's) and the tip's sideways deflection over its vertical one (the Kuhn \
+         lattice has no mirror symmetry across the bar; the mirrored one has it at an even \
+         count of cells across).",
         100.0 * (reference / SCIKIT_FEM - 1.0),
         100.0 * moved,
         pd_errors.len(),

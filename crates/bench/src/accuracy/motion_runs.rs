@@ -10,10 +10,13 @@
 use std::time::Instant;
 
 use perifrac_physics::{Implicit, ImplicitConfig, Loads, Solver, Vec3, XuMaterial, XuModel};
+use perifrac_topology::primitives::Lattice;
 
 use super::motion::{Motion, Trajectory, SAMPLES};
 use super::{Run, DENSITY, LENGTH, SIDE};
-use crate::bar::{cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, PdMaterial};
+use crate::bar::{
+    cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, Cut, FittedChen, PdMaterial,
+};
 use crate::BenchError;
 
 /// Frames per second of the implicit runs' frame (the steps per frame count against it).
@@ -24,6 +27,8 @@ pub(super) const FRAME_RATE: f64 = 24.0;
 pub(super) enum Method {
     /// Chen's model, velocity Verlet (the paper's method).
     ChenExplicit,
+    /// Chen's model with the fitted dilatation (`correction = "fitted"`), velocity Verlet.
+    ChenFitted,
     /// Xu's model, velocity Verlet.
     XuExplicit,
     /// Xu's model, the implicit quasi-Newton step, this many steps per frame.
@@ -35,6 +40,7 @@ impl Method {
     pub(super) fn label(self) -> String {
         match self {
             Method::ChenExplicit => "PD Chen explicit".into(),
+            Method::ChenFitted => "PD Chen fitted explicit".into(),
             Method::XuExplicit => "PD Xu explicit".into(),
             Method::XuImplicit(n) => format!("PD Xu implicit {n}/frame"),
         }
@@ -50,6 +56,7 @@ impl Method {
     ) -> Result<(Run, Vec<Vec3>, Trajectory), BenchError> {
         match self {
             Method::ChenExplicit => explicit(motion, nx, k, &motion.material(), self),
+            Method::ChenFitted => explicit(motion, nx, k, &FittedChen(motion.material()), self),
             Method::XuExplicit => explicit(motion, nx, k, &xu_material(motion)?, self),
             Method::XuImplicit(per_frame) => implicit(motion, nx, k, per_frame),
         }
@@ -84,7 +91,15 @@ fn explicit<T: PdMaterial>(
         case: case.clone(),
         cause,
     };
-    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, material)?;
+    let (b, held) = clamped_bar(
+        &case,
+        LENGTH,
+        SIDE,
+        nx,
+        k,
+        material,
+        Cut::Lattice(Lattice::Kuhn),
+    )?;
     let bonds = b.bonds();
     let tracked: Vec<u32> = b.select(|x| x[0] > 0.0);
     let mut loads = Loads::new(b.rest().len()).with_gravity(motion.gravity());
@@ -140,7 +155,15 @@ fn implicit(
         case: case.clone(),
         cause,
     };
-    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &xu_material(motion)?)?;
+    let (b, held) = clamped_bar(
+        &case,
+        LENGTH,
+        SIDE,
+        nx,
+        k,
+        &xu_material(motion)?,
+        Cut::Lattice(Lattice::Kuhn),
+    )?;
     let bonds = b.bonds();
     let tracked: Vec<u32> = b.select(|x| x[0] > 0.0);
     let mut loads = Loads::new(b.rest().len()).with_gravity(motion.gravity());

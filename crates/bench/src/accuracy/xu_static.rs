@@ -12,10 +12,10 @@ use perifrac_fem::{
 use perifrac_physics::{
     AnchorMotion, Implicit, ImplicitConfig, Loads, PhysicsError, Solver, Vec3, XuMaterial, XuModel,
 };
-use perifrac_topology::primitives::bar_data;
+use perifrac_topology::primitives::{bar_data, Lattice};
 
 use super::{Run, LENGTH, SIDE};
-use crate::bar::{cells_across, held_bar, xu_neo_hookean};
+use crate::bar::{cells_across, held_bar, xu_neo_hookean, Cut};
 use crate::fit::affine_at;
 use crate::{BenchError, Effort};
 
@@ -248,7 +248,16 @@ pub(super) fn peridynamics(
         cause,
     };
     let material = shape.material(&case)?;
-    let bar = held_bar(&case, LENGTH, SIDE, nx, k, &material, shape == Shape::Twist)?;
+    let bar = held_bar(
+        &case,
+        LENGTH,
+        SIDE,
+        nx,
+        k,
+        &material,
+        shape == Shape::Twist,
+        Cut::Lattice(Lattice::Kuhn),
+    )?;
     let bonds = bar.body.bonds();
     let tracked = bar.body.select(|x| x[0] > 0.0 && x[0] < LENGTH);
     let free_end = bar

@@ -250,6 +250,16 @@ pub(crate) fn check_colliders(
         if b.mass.is_some() && b.density.is_some() {
             return Err(ctx.err(&key, "give either mass or density, not both"));
         }
+        if let Some(t) = b.until {
+            ctx.non_negative(&format!("{key}.until"), t)?;
+            if b.mass.is_some() || b.density.is_some() {
+                return Err(ctx.err(
+                    format!("{key}.until"),
+                    "a ball with a mass moves under its forces: only a kinematic ball (no mass \
+                     or density) can be stopped",
+                ));
+            }
+        }
         if let Some(m) = b.mass {
             ctx.positive(&format!("{key}.mass"), m, "kg")?;
         }

@@ -20,12 +20,12 @@ use super::defaults;
 /// What the scene's object is made from, read and checked but not yet built: a box's counts,
 /// a surface to mesh, or a tet file's arrays.
 enum Source {
-    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids: the Kuhn
-    /// lattice, or unstructured tets from points of this seed.
+    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids: a lattice
+    /// (`Ok`), or unstructured tets from points of this seed (`Err`).
     Box {
         size: [f64; 3],
         cells: [usize; 3],
-        unstructured: Option<u64>,
+        cut: Result<primitives::Lattice, u64>,
     },
     /// A closed surface for the built-in mesher (a round primitive's or a file's).
     Surface {
@@ -124,30 +124,31 @@ pub(super) fn plan(ctx: &Ctx, scene: &Scene) -> Result<Planned, SceneError> {
             primitives::check_box([0.0; 3], scaled, cells)
                 .map_err(|e| ctx.err("mesh.size", format!("{size:?} m in {cells:?} cells: {e}")))?;
             let cell: [f64; 3] = std::array::from_fn(|k| scaled[k] / cells[k] as f64);
-            let unstructured = match m.structure.as_deref() {
-                None | Some("unstructured") => Some(m.seed.unwrap_or(defaults::MESH_SEED)),
-                Some("lattice") => {
-                    if m.seed.is_some() {
-                        return Err(ctx.err(
-                            "mesh.seed",
-                            "a lattice box has no random points: drop seed or set structure = \"unstructured\"",
-                        ));
-                    }
-                    None
-                }
+            let lattice = match m.structure.as_deref() {
+                None | Some("unstructured") => None,
+                Some("lattice") => Some(primitives::Lattice::Kuhn),
+                Some("mirrored") => Some(primitives::Lattice::Mirrored),
                 Some(other) => {
                     return Err(ctx.err(
                         "mesh.structure",
-                        format!("unknown structure \"{other}\" (known: unstructured, lattice)"),
+                        format!(
+                            "unknown structure \"{other}\" (known: unstructured, lattice, mirrored)"
+                        ),
                     ))
                 }
             };
+            let cut = match lattice {
+                None => Err(m.seed.unwrap_or(defaults::MESH_SEED)),
+                Some(_) if m.seed.is_some() => {
+                    return Err(ctx.err(
+                        "mesh.seed",
+                        "a lattice box has no random points: drop seed or set structure = \"unstructured\"",
+                    ))
+                }
+                Some(l) => Ok(l),
+            };
             (
-                Source::Box {
-                    size,
-                    cells,
-                    unstructured,
-                },
+                Source::Box { size, cells, cut },
                 MeshShape::of_box(cell, counts),
             )
         }
@@ -231,12 +232,12 @@ pub(super) fn build(scene: &Scene, planned: Planned) -> Result<TetMesh, SceneErr
         Source::Box {
             size,
             cells,
-            unstructured: None,
-        } => primitives::box_data([0.0; 3], size, cells),
+            cut: Ok(lattice),
+        } => primitives::lattice_box_data([0.0; 3], size, cells, lattice),
         Source::Box {
             size,
             cells,
-            unstructured: Some(seed),
+            cut: Err(seed),
         } => unstructured_box_data([0.0; 3], size, cells, seed)
             .map_err(|e| mesh_err(e.to_string()))?,
         Source::Surface { vertices, faces } => {

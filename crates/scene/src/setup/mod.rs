@@ -442,6 +442,13 @@ impl Setup {
             self_contact,
             radii,
             releases,
+        )
+        .with_ball_stops(
+            f.ball
+                .iter()
+                .enumerate()
+                .filter_map(|(i, b)| b.until.map(|t| (t, i)))
+                .collect(),
         );
         Ok(Setup {
             scene_path: scene.path.clone(),

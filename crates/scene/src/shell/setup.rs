@@ -251,6 +251,12 @@ impl ShellSetup {
             return Err(ctx.err("output.frames", "must be at least 1"));
         }
         check_colliders(&ctx, &f.ground, &f.ball)?;
+        if let Some(i) = f.ball.iter().position(|b| b.until.is_some()) {
+            return Err(ctx.err(
+                format!("ball[{i}].until"),
+                "shell scenes do not stop balls yet: drop until (the ball keeps its velocity)",
+            ));
+        }
         check_velocities(&ctx, &f.velocity)?;
         for (i, a) in f.anchor.iter().enumerate() {
             ctx.region(&format!("anchor[{i}].region"), &a.region)?;
