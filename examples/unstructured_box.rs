@@ -1,5 +1,6 @@
-//! Mesh a box as unstructured tets (as scenes do by default, `[mesh] structure`) and as the
-//! Kuhn lattice, print their counts and quality, and write both as Medit `.mesh` files.
+//! Mesh a box as unstructured tets (as scenes do by default, `[mesh] structure`), as the Kuhn
+//! lattice and as the mirrored lattice, print their counts and quality, and write each as a
+//! Medit `.mesh` file.
 //!
 //! Run: `cargo run --release --example unstructured_box -- [OUT_DIR]` (default
 //! `out/unstructured_box`).
@@ -20,9 +21,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (lo, hi, cells) = ([0.0; 3], [0.6, 0.6, 0.06], [24, 24, 3]);
     let m = unstructured_box(lo, hi, cells, 1)?;
     let (kv, kt) = primitives::box_data(lo, hi, cells);
+    let mirrored = primitives::Lattice::Mirrored;
+    let (mv, mt) = primitives::lattice_box_data(lo, hi, cells, mirrored);
     for (name, v, t) in [
         ("unstructured", &m.vertices, &m.tets),
         ("lattice", &kv, &kt),
+        ("mirrored", &mv, &mt),
     ] {
         let min = t
             .iter()

@@ -40,7 +40,7 @@ const XU_METHODS: [Method; 4] = [
 const XU_LEVELS: [usize; 2] = [30, 60];
 /// Horizon factor of Xu's runs.
 const XU_FACTOR: f64 = 1.5;
-/// Horizon factor of the runs with the fitted dilatation.
+/// Horizon factor of the runs with the fitted dilatation and of those on unstructured tets.
 const FITTED_FACTOR: f64 = 1.5;
 
 /// Diagonal of the bar's bounding box (m): the paper's length scale for the deviation.
@@ -247,8 +247,14 @@ fn motion_case(
             plan.push((Method::ChenExplicit, nx, k));
         }
     }
-    for &nx in levels {
-        plan.push((Method::ChenFitted, nx, FITTED_FACTOR));
+    for method in [
+        Method::ChenFitted,
+        Method::ChenUnstructured(false),
+        Method::ChenUnstructured(true),
+    ] {
+        for &nx in levels {
+            plan.push((method, nx, FITTED_FACTOR));
+        }
     }
     for &nx in xu_levels {
         for m in XU_METHODS {
@@ -296,8 +302,9 @@ fn motion_case(
          diagonal, and halving the step there moves it by {:.4}%: for second-order elements \
          the reference's own error is then at most {:.3}%, under a tenth of {resolved} of the \
          {} peridynamic deviations (those above {:.2}%). Besides Chen's model (the paper's, \
-         stepped explicitly; \"fitted\" rows with the fitted dilatation of \
-         `correction = \"fitted\"` at k = 1.5), Xu's neo-Hookean-like model with the same E and nu (consistent \
+         stepped explicitly on the Kuhn lattice; \"fitted\" rows with the fitted dilatation of \
+         `correction = \"fitted\"` at k = 1.5, \"unstructured\" rows on the scenes' default \
+         box, Delaunay tets of well-spaced random points, seed 1), Xu's neo-Hookean-like model with the same E and nu (consistent \
          moduli) runs explicitly and implicitly at {}, {} and {} steps per 1/24 s frame ({}, \
          {} and {} steps over the {} s; the scene's implicit defaults, tolerance 1e-4 and at \
          most 100 iterations a step, no damping but the step's own).",
