@@ -6,8 +6,12 @@ use perifrac_physics::{
     ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel,
     Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
 };
-use perifrac_topology::mesher::unstructured_box_data;
-use perifrac_topology::primitives::{lattice_box_data, Lattice};
+use perifrac_topology::mesher::box_cut_data;
+pub(crate) use perifrac_topology::mesher::BoxCut as Cut;
+
+/// Seed of the bench's unstructured bars' points (the scenes' default, `defaults::MESH_SEED`).
+pub(crate) const UNSTRUCTURED_SEED: u64 = 1;
+use perifrac_topology::primitives::Lattice;
 use perifrac_topology::TetMesh;
 
 use crate::error::BenchError;
@@ -119,15 +123,6 @@ pub(crate) fn mesh_body<T: PdMaterial>(
     Ok(Body { model })
 }
 
-/// How a bench box is cut into tets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Cut {
-    /// A lattice, six tets a cell.
-    Lattice(Lattice),
-    /// The unstructured mesher's tets from points of this seed, about as many.
-    Unstructured(u64),
-}
-
 /// The box `[min, max]` in `cells` cells, cut as `cut` says, as a peridynamic body of
 /// `material` with horizon `k` times the mesh's mean edge length.
 pub(crate) fn cut_body<T: PdMaterial>(
@@ -139,15 +134,10 @@ pub(crate) fn cut_body<T: PdMaterial>(
     material: &T,
     cut: Cut,
 ) -> Result<Body<T::Model>, BenchError> {
-    let (v, t) = match cut {
-        Cut::Lattice(lattice) => lattice_box_data(min, max, cells, lattice),
-        Cut::Unstructured(seed) => {
-            unstructured_box_data(min, max, cells, seed).map_err(|e| BenchError::Mesh {
-                case: case.into(),
-                message: e.to_string(),
-            })?
-        }
-    };
+    let (v, t) = box_cut_data(min, max, cells, cut).map_err(|e| BenchError::Mesh {
+        case: case.into(),
+        message: e.to_string(),
+    })?;
     mesh_body(case, &tet_mesh(case, v, t)?, k, material)
 }
 

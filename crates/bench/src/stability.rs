@@ -407,8 +407,8 @@ fn sphere_impact(cells: [usize; 3]) -> CaseResult {
 /// (a kinematic ball of radius 10 m, flat over the block to 0.1 mm), which then stops and holds
 /// for as long again; `brittle` gives the steel a fracture threshold (and so, by default,
 /// contact between its fragments), otherwise contact between particles is asked for. Plate
-/// and ground are ten times as stiff as the default contact, so the block's particles stay
-/// within a tenth of a cell of them.
+/// and ground are ten times as stiff as the default contact (contact spheres then reach at
+/// most 30% of their radius into them, measured in the elastic press).
 fn crush(cells: [usize; 3], brittle: bool) -> CaseResult {
     let size = cells.map(|c| c as f64 * 0.01);
     let speed = 10.0;

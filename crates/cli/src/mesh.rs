@@ -7,7 +7,7 @@ use std::process::Command;
 use anyhow::{bail, Context, Result};
 use perifrac_io::TetFormat;
 use perifrac_topology::mesher::{
-    estimated_tets, mesh_surface, unstructured_box_data, MesherOptions, MesherReport,
+    box_cut_data, estimated_tets, mesh_surface, BoxCut, MesherOptions, MesherReport,
 };
 use perifrac_topology::spec::{parse_primitive, parse_round};
 use perifrac_topology::{primitives, TetMesh};
@@ -87,8 +87,11 @@ pub fn run(input: &str, output: &Path, args: &MeshArgs) -> Result<()> {
         output,
         args.resolution.unwrap_or(DEFAULT_PRIMITIVE_RESOLUTION),
         args.cells,
-        args.unstructured,
-        args.mirrored,
+        match (args.unstructured, args.mirrored) {
+            (Some(seed), _) => BoxCut::Unstructured(seed),
+            (None, true) => BoxCut::Lattice(primitives::Lattice::Mirrored),
+            (None, false) => BoxCut::Lattice(primitives::Lattice::Kuhn),
+        },
         args.allow_large,
     )
 }
@@ -280,8 +283,7 @@ fn run_primitive(
     output: &Path,
     resolution: usize,
     cells: Option<&[usize]>,
-    unstructured: Option<u64>,
-    mirrored: bool,
+    cut: BoxCut,
     allow_large: bool,
 ) -> Result<()> {
     let prim = parse_primitive(spec)?;
@@ -293,19 +295,8 @@ fn run_primitive(
     primitives::check_box([0.0; 3], prim.size, counts).with_context(what)?;
     check_memory(tets as u64, vertices as u64, allow_large)?;
     let format = TetFormat::from_path(output)?;
-    let mesh = match unstructured {
-        None if mirrored => {
-            let lattice = primitives::Lattice::Mirrored;
-            let (v, t) = primitives::lattice_box_data([0.0; 3], prim.size, counts, lattice);
-            TetMesh::new(v, t).with_context(what)?.0
-        }
-        None => primitives::try_box_mesh([0.0; 3], prim.size, counts).with_context(what)?,
-        Some(seed) => {
-            let (v, t) =
-                unstructured_box_data([0.0; 3], prim.size, counts, seed).with_context(what)?;
-            TetMesh::new(v, t).with_context(what)?.0
-        }
-    };
+    let (v, t) = box_cut_data([0.0; 3], prim.size, counts, cut).with_context(what)?;
+    let mesh = TetMesh::new(v, t).with_context(what)?.0;
     let data = to_data(&mesh, vec![0; mesh.num_tets()], Vec::new());
     perifrac_io::write_tet_mesh(output, &data, format)?;
     eprintln!(
@@ -358,8 +349,15 @@ mod tests {
                 "more than a mesh can index",
             ),
         ] {
-            let e =
-                run_primitive(spec, &out, 20, cells.as_deref(), None, false, false).unwrap_err();
+            let e = run_primitive(
+                spec,
+                &out,
+                20,
+                cells.as_deref(),
+                BoxCut::Lattice(primitives::Lattice::Kuhn),
+                false,
+            )
+            .unwrap_err();
             let msg = format!("{e:#}");
             assert!(msg.contains(spec) && msg.contains(expect), "{spec}: {msg}");
             assert!(!out.exists());

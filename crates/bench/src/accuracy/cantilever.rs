@@ -18,14 +18,14 @@ use super::{
     clamped_fem_bar, material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH,
     POISSON, SIDE, YOUNG,
 };
-use crate::bar::{cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen};
+use crate::bar::{
+    cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen, UNSTRUCTURED_SEED,
+};
 use crate::table::Table;
 use crate::{BenchError, Effort};
 use perifrac_topology::primitives::Lattice;
 
 const GRAVITY: f64 = 9.81;
-/// Seed of the unstructured bars' points (the scenes' default).
-const UNSTRUCTURED_SEED: u64 = 1;
 /// Euler-Bernoulli tip deflection `q L^4 / (8 E I)` (m), quoted in issue 6.
 pub const EULER_BERNOULLI: f64 = 0.014715;
 /// Timoshenko tip deflection (m), quoted in issue 6.

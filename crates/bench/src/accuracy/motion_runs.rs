@@ -15,7 +15,8 @@ use perifrac_topology::primitives::Lattice;
 use super::motion::{Motion, Trajectory, SAMPLES};
 use super::{Run, DENSITY, LENGTH, SIDE};
 use crate::bar::{
-    cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, Cut, FittedChen, PdMaterial,
+    cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, Cut, FittedChen,
+    PdMaterial, UNSTRUCTURED_SEED,
 };
 use crate::BenchError;
 
@@ -91,8 +92,8 @@ fn case_name(motion: Motion, method: Method, nx: usize, k: f64) -> String {
 
 /// The Kuhn lattice, the bars' default mesh.
 const KUHN: Cut = Cut::Lattice(Lattice::Kuhn);
-/// Unstructured tets from points of seed 1 (the scenes' default box).
-const UNSTRUCTURED: Cut = Cut::Unstructured(1);
+/// Unstructured tets (the scenes' default box).
+const UNSTRUCTURED: Cut = Cut::Unstructured(UNSTRUCTURED_SEED);
 
 /// Velocity Verlet at 0.8 of the stable step on `material` and the mesh `cut`: at each
 /// sample, the whole steps that reach or pass it (the sample times of the paper's runs, kept
@@ -168,15 +169,7 @@ fn implicit(
         case: case.clone(),
         cause,
     };
-    let (b, held) = clamped_bar(
-        &case,
-        LENGTH,
-        SIDE,
-        nx,
-        k,
-        &xu_material(motion)?,
-        Cut::Lattice(Lattice::Kuhn),
-    )?;
+    let (b, held) = clamped_bar(&case, LENGTH, SIDE, nx, k, &xu_material(motion)?, KUHN)?;
     let bonds = b.bonds();
     let tracked: Vec<u32> = b.select(|x| x[0] > 0.0);
     let mut loads = Loads::new(b.rest().len()).with_gravity(motion.gravity());

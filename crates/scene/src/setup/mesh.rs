@@ -4,7 +4,7 @@
 use perifrac_physics::NO_NEIGHBOUR;
 use perifrac_topology::faces::FACE_CORNERS;
 use perifrac_topology::mesher::{
-    cylinder_surface, estimated_tets, mesh_surface, sphere_surface, unstructured_box_data,
+    box_cut_data, cylinder_surface, estimated_tets, mesh_surface, sphere_surface, BoxCut,
     MesherOptions,
 };
 use perifrac_topology::{primitives, TetMesh, NO_TET};
@@ -20,12 +20,12 @@ use super::defaults;
 /// What the scene's object is made from, read and checked but not yet built: a box's counts,
 /// a surface to mesh, or a tet file's arrays.
 enum Source {
-    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids: a lattice
-    /// (`Ok`), or unstructured tets from points of this seed (`Err`).
+    /// A box primitive from the origin (`size` in m, unscaled), of `cells` cuboids, cut as
+    /// `cut` says.
     Box {
         size: [f64; 3],
         cells: [usize; 3],
-        cut: Result<primitives::Lattice, u64>,
+        cut: BoxCut,
     },
     /// A closed surface for the built-in mesher (a round primitive's or a file's).
     Surface {
@@ -138,14 +138,14 @@ pub(super) fn plan(ctx: &Ctx, scene: &Scene) -> Result<Planned, SceneError> {
                 }
             };
             let cut = match lattice {
-                None => Err(m.seed.unwrap_or(defaults::MESH_SEED)),
+                None => BoxCut::Unstructured(m.seed.unwrap_or(defaults::MESH_SEED)),
                 Some(_) if m.seed.is_some() => {
                     return Err(ctx.err(
                         "mesh.seed",
                         "a lattice box has no random points: drop seed or set structure = \"unstructured\"",
                     ))
                 }
-                Some(l) => Ok(l),
+                Some(l) => BoxCut::Lattice(l),
             };
             (
                 Source::Box { size, cells, cut },
@@ -229,17 +229,9 @@ pub(super) fn build(scene: &Scene, planned: Planned) -> Result<TetMesh, SceneErr
     } = planned;
     let mut lines = None;
     let (mut vertices, tets) = match source {
-        Source::Box {
-            size,
-            cells,
-            cut: Ok(lattice),
-        } => primitives::lattice_box_data([0.0; 3], size, cells, lattice),
-        Source::Box {
-            size,
-            cells,
-            cut: Err(seed),
-        } => unstructured_box_data([0.0; 3], size, cells, seed)
-            .map_err(|e| mesh_err(e.to_string()))?,
+        Source::Box { size, cells, cut } => {
+            box_cut_data([0.0; 3], size, cells, cut).map_err(|e| mesh_err(e.to_string()))?
+        }
         Source::Surface { vertices, faces } => {
             let opts = MesherOptions {
                 edge_length: None,

@@ -36,6 +36,32 @@ pub use surface_check::{
 pub use unstructured::{unstructured_box_data, UnstructuredError};
 pub use winding::Winding;
 
+/// How a box is cut into tets: a lattice of six tets a cell, or the unstructured mesher's tets
+/// from points of a seed (about as many).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoxCut {
+    /// [`crate::primitives::lattice_box_data`].
+    Lattice(crate::primitives::Lattice),
+    /// [`unstructured_box_data`] with this seed.
+    Unstructured(u64),
+}
+
+/// Vertices and tets of the box `min..max` (m) of `cells` cuboids, cut as `cut` says; an error
+/// only from the unstructured mesher. The counts are not checked here (see
+/// [`crate::primitives::check_box`]).
+#[allow(clippy::type_complexity)]
+pub fn box_cut_data(
+    min: [f64; 3],
+    max: [f64; 3],
+    cells: [usize; 3],
+    cut: BoxCut,
+) -> Result<(Vec<[f64; 3]>, Vec<[u32; 4]>), UnstructuredError> {
+    match cut {
+        BoxCut::Lattice(l) => Ok(crate::primitives::lattice_box_data(min, max, cells, l)),
+        BoxCut::Unstructured(seed) => unstructured_box_data(min, max, cells, seed),
+    }
+}
+
 /// Smallest and largest coordinates (m) of `points`; infinities of the wrong sign when empty.
 pub fn point_bounds(points: impl IntoIterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
