@@ -2,9 +2,9 @@
 //! (Chen's or Xu's, through [`PdMaterial`]), picking particles, fitting.
 
 use perifrac_physics::{
-    ChenMaterial, ChenModel, ChenOptions, Curve, Discretization, Explicit, ExplicitConfig,
-    ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel,
-    Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
+    stable_frequency, ChenMaterial, ChenModel, ChenOptions, Curve, Discretization, Explicit,
+    ExplicitConfig, ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError,
+    QuasiNewtonModel, Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
 };
 use perifrac_topology::mesher::box_cut_data;
 pub(crate) use perifrac_topology::mesher::BoxCut as Cut;
@@ -243,6 +243,24 @@ impl<M: ForceModel> Body<M> {
     /// An explicit solver at 0.8 of the estimated stable step.
     pub fn solver(self, case: &str, loads: Loads) -> Result<Explicit<M>, BenchError> {
         self.solver_at(case, loads, TimeStep::Auto { safety: 0.8 })
+    }
+
+    /// An explicit solver whose step divides `interval` (s) into whole steps: the largest such
+    /// step at or under 0.8 of the estimated stable one, so that runs compared at sample times
+    /// reach each sample exactly (whole steps of the unrounded step would pass the k-th sample
+    /// by up to k steps).
+    pub fn solver_dividing(
+        mut self,
+        case: &str,
+        loads: Loads,
+        interval: f64,
+    ) -> Result<Explicit<M>, BenchError> {
+        let rest = self.rest().to_vec();
+        let horizon = self.horizon();
+        let (omega, _) = stable_frequency(&mut self.model, &rest, horizon);
+        let stable = 0.8 * 2.0 / omega;
+        let dt = interval / (interval / stable).ceil().max(1.0);
+        self.solver_at(case, loads, TimeStep::Fixed(dt))
     }
 
     /// An explicit solver with time step `dt`.

@@ -73,23 +73,29 @@ fn fitted_dilatation_reads_every_homogeneous_strain_on_every_particle() {
 
 #[test]
 fn fitted_force_is_the_gradient_and_objective() {
-    let (disc, _, _) = block([0.03, 0.03, 0.02], [3, 3, 2], 1.5);
-    let mut m = ChenModel::with_options(disc, &[steel()], fitted()).unwrap();
-    let x = m.discretization().rest_positions().to_vec();
-    let y = nonuniform(&x, 0.01, 0.03);
-    let f = forces(&mut m, &y);
-    let worst = gradient_mismatch(&mut m, &y, &f, 1e-7 * 0.01, 7);
-    eprintln!("fitted: max |f + dE/dy| / max |f| = {worst:e}");
-    // central differences of step 1e-9 m on energies of ~1e2 J: the same bound as the
-    // scalar-calibrated model's test (tests/elastic.rs)
-    assert!(worst < 1e-5);
-    let r = rotation([1.0, 2.0, 0.5], 1.0);
-    let fr = forces(&mut m, &affine(&y, &r, [0.3, -1.2, 0.7]));
-    let rf: Vec<Vec3> = f.iter().map(|v| mat_vec(&r, *v)).collect();
-    let err = diff_all(&fr, &rf) / norm_all(&f);
-    eprintln!("fitted: rotated force error {err:e}");
-    // as tests/elastic.rs: rounding of rotated lengths against 1% strains
-    assert!(err < 1e-9);
+    // isotropic (the fitted weights beside `delta / r`) and anisotropic (beside stored
+    // per-bond weights and the reverse index): the two weight layouts the loops take
+    let mut aniso = steel();
+    aniso.anisotropy = Some([[2.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
+    for (name, mat) in [("isotropic", steel()), ("anisotropic", aniso)] {
+        let (disc, _, _) = block([0.03, 0.03, 0.02], [3, 3, 2], 1.5);
+        let mut m = ChenModel::with_options(disc, &[mat], fitted()).unwrap();
+        let x = m.discretization().rest_positions().to_vec();
+        let y = nonuniform(&x, 0.01, 0.03);
+        let f = forces(&mut m, &y);
+        let worst = gradient_mismatch(&mut m, &y, &f, 1e-7 * 0.01, 7);
+        eprintln!("fitted {name}: max |f + dE/dy| / max |f| = {worst:e}");
+        // central differences of step 1e-9 m on energies of ~1e2 J: the same bound as the
+        // scalar-calibrated model's test (tests/elastic.rs)
+        assert!(worst < 1e-5, "{name}: {worst}");
+        let r = rotation([1.0, 2.0, 0.5], 1.0);
+        let fr = forces(&mut m, &affine(&y, &r, [0.3, -1.2, 0.7]));
+        let rf: Vec<Vec3> = f.iter().map(|v| mat_vec(&r, *v)).collect();
+        let err = diff_all(&fr, &rf) / norm_all(&f);
+        eprintln!("fitted {name}: rotated force error {err:e}");
+        // as tests/elastic.rs: rounding of rotated lengths against 1% strains
+        assert!(err < 1e-9, "{name}: {err}");
+    }
 }
 
 #[test]

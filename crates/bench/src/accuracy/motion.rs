@@ -139,7 +139,11 @@ impl Reference {
         };
         let (e, nu) = motion.young_poisson();
         let problem = clamped_fem_bar(nx, true, e, nu, motion.gravity()).map_err(fem)?;
+        // The largest step under the fraction that divides the interval between samples, so
+        // each sample is at its time (as the peridynamic runs' are).
+        let interval = motion.duration() / SAMPLES as f64;
         let dt = dt_fraction * critical_time_step(&problem, 60);
+        let dt = interval / (interval / dt).ceil();
         let nodes = problem.mesh().nodes().to_vec();
         let mut displacements = Vec::with_capacity(SAMPLES);
         let mut steps = 0;

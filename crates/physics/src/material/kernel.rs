@@ -47,26 +47,27 @@ impl Weights for PerBond<'_> {
     }
 }
 
-/// Per-directed-bond deviatoric weights `w` and fitted dilatation weights `dw` (the
-/// dilatation fit of [`super::ChenOptions::fitted_dilatation`]), with the reverse-bond index.
+/// Deviatoric weights `W` (isotropic or per bond) with the fitted dilatation weights of
+/// [`super::ChenOptions::fitted_dilatation`]: `dw[k] = (d_ij, d_ji)` stored in bond order, so
+/// the loops stream 16 bytes a bond and gather nothing through the reverse index.
 #[derive(Clone, Copy)]
-pub(crate) struct Fitted<'a> {
-    pub w: &'a [f64],
-    pub dw: &'a [f64],
-    pub rev: &'a [u32],
+pub(crate) struct Fitted<'a, W> {
+    pub base: W,
+    pub dw: &'a [[f64; 2]],
 }
 
-impl Weights for Fitted<'_> {
+impl<W: Weights> Weights for Fitted<'_, W> {
     const SPLIT: bool = true;
 
     #[inline(always)]
-    fn pair(&self, k: usize, _r: f64) -> (f64, f64) {
-        (self.w[k], self.w[self.rev[k] as usize])
+    fn pair(&self, k: usize, r: f64) -> (f64, f64) {
+        self.base.pair(k, r)
     }
 
     #[inline(always)]
     fn dil_pair(&self, k: usize, _r: f64) -> (f64, f64) {
-        (self.dw[k], self.dw[self.rev[k] as usize])
+        let [dij, dji] = self.dw[k];
+        (dij, dji)
     }
 }
 
