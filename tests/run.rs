@@ -294,15 +294,16 @@ fn bad_scenes_get_one_clear_message_and_write_nothing() {
 
 #[test]
 fn an_instability_mid_run_stops_with_a_message_and_keeps_the_frames() {
-    // A runaway load: gravity of 2e7 m/s^2 accelerates the slab until, after about 0.45 ms, a
-    // particle moves further in one step than the blow-up guard allows (half a horizon). The
-    // stable-step estimate cannot see it coming (gravity adds no stiffness), so the run starts
-    // and writes a few frames (0.1 ms apart; the check allows 2 to 9 of the 11) before it stops.
+    // A runaway load: gravity of 4e7 m/s^2 accelerates the slab until, after about half a
+    // millisecond, a particle moves further in one step than the blow-up guard allows (half a
+    // horizon). The stable-step estimate cannot see it coming (gravity adds no stiffness), so
+    // the run starts and writes a few frames (0.1 ms apart; the check allows 2 to 9 of the 11)
+    // before it stops. (At 2e7 the fitted dilatation's shorter step let it reach frame 10.)
     let tmp = tempfile::tempdir().unwrap();
     let text = std::fs::read_to_string(tiny_wall(tmp.path())).unwrap();
     let text = text.replacen(
         "duration = 0.005",
-        "duration = 0.001\ngravity = [0.0, 0.0, -2e7]",
+        "duration = 0.001\ngravity = [0.0, 0.0, -4e7]",
         1,
     );
     let scene = tmp.path().join("unstable.toml");

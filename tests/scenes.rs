@@ -163,8 +163,8 @@ fn impact_point_dent(name: &str, cells: Option<[usize; 3]>) -> (f64, f64) {
 fn the_elastic_slab_recovers_and_the_plastic_slab_keeps_a_dent() {
     // 16 x 16 x 2 cells instead of 24 x 24 x 3 (a fifth of the work). At the files' own cells
     // (release, `impact_point_at_the_files_cells`) the impact point ends at -0.4 mm (elastic,
-    // 0.5% of its deepest -76 mm) and -17 mm (plastic, 19% of its deepest -90 mm); here at
-    // -0.1 mm of -81 mm and -16.3 mm of -94 mm (17%). (The plastic dent was 36% of the deepest
+    // 0.5% of its deepest -77 mm) and -18.4 mm (plastic, 20% of its deepest -91 mm); here at
+    // +0.3 mm of -81 mm and -18.8 mm of -94 mm (20%). (The plastic dent was 36% of the deepest
     // point while surface particles, whose calibrated b_i is larger, yielded at about half the
     // scene's yield strain; each particle now yields at it: docs/DECISIONS.md.)
     let cells = Some([16, 16, 2]);
@@ -178,7 +178,7 @@ fn the_elastic_slab_recovers_and_the_plastic_slab_keeps_a_dent() {
     assert!(elastic_deepest < -0.03 && plastic_deepest < -0.03);
     // Elastic: back to within 10% of the deepest point (measured 0.5% at full resolution).
     assert!(elastic.abs() < 0.1 * elastic_deepest.abs(), "{elastic}");
-    // Plastic: a dent of more than 10% of the deepest point stays (measured 17%), a hundred
+    // Plastic: a dent of more than 10% of the deepest point stays (measured 20%), a hundred
     // times the elastic slab's.
     assert!(plastic < 0.1 * plastic_deepest, "{plastic}");
 }
@@ -241,11 +241,15 @@ fn stretched_beams_thin_by_their_poisson_ratio() {
         let measured = -lateral / axial;
         eprintln!("{name}: axial {axial:.4}, lateral {lateral:.4}, nu {measured:.3} (given {nu})");
         assert!((axial - 0.2).abs() < 0.02, "{name}: axial strain {axial}");
-        // Measured 0.083, 0.199 and 0.320 against 0.098, 0.200 and 0.301: off by 0.015, 0.001
-        // and 0.019 at 20% strain, where the engineering ratio measured here may differ from the
-        // small-strain one by about 0.02; the bound allows that and half as much again.
+        // Measured 0.061, 0.173 and 0.289 against 0.098, 0.200 and 0.301 (the scalar
+        // calibration: 0.083, 0.199, 0.320). Two parts: the model's own small-strain ratio on a
+        // section 6 cells across at k = 1 is 0.068, 0.172 and 0.276 with the fitted dilatation
+        // (its surface particles read shear a little stiff; `cargo test --release -p
+        // perifrac-physics --test fitted fitted_moduli_study -- --ignored --nocapture`), low by
+        // up to 0.03; at 20% strain the engineering ratio measured here moves from that by up
+        // to 0.013 (about 0.02 expected). The bound is their sum.
         assert!(
-            (measured - nu).abs() < 0.03,
+            (measured - nu).abs() < 0.05,
             "{name}: nu {measured} for {nu}"
         );
     }
@@ -282,9 +286,10 @@ fn anisotropic_glass_cracks_along_its_stiff_axis() {
     // 16 x 16 x 2 cells instead of 24 x 24 x 3. G = diag(2, 0.5, 1) makes bonds along x four
     // times softer: they stretch and break first, so the crack faces face x (cracks run along
     // y). On the unstructured tets the scenes use, the crack normals' mean |n_x| : |n_y| at
-    // these cells is 0.512 : 0.510 (ratio 1.004) for the isotropic slab and 0.556 : 0.453
-    // (1.228) for the anisotropic one. (On the Kuhn lattice, whose few face directions
-    // exaggerate it, 0.466 : 0.466 and 0.599 : 0.346.)
+    // these cells is 0.525 : 0.508 (ratio 1.033) for the isotropic slab and 0.577 : 0.449
+    // (1.285) for the anisotropic one (the scalar calibration: 0.512 : 0.510 and 0.556 :
+    // 0.453). (On the Kuhn lattice, whose few face directions exaggerate it, 0.466 : 0.466 and
+    // 0.599 : 0.346, calibrated.)
     let mut ratios = Vec::new();
     for name in ["wall.toml", "wall_anisotropic.toml"] {
         let mut scene = load(name);
@@ -296,8 +301,8 @@ fn anisotropic_glass_cracks_along_its_stiff_axis() {
         ratios.push(nx / ny);
     }
     // The isotropic slab and its ball are symmetric under x <-> y and its mesh prefers no
-    // direction: within 0.05 of 1 (measured 0.004 off). The anisotropic slab's ratio must lie
-    // beyond three times that band (measured 1.228), which an isotropic one does not reach.
+    // direction: within 0.05 of 1 (measured 0.033 off). The anisotropic slab's ratio must lie
+    // beyond three times that band (measured 1.285), which an isotropic one does not reach.
     assert!((ratios[0] - 1.0).abs() < 0.05, "isotropic: {}", ratios[0]);
     assert!(ratios[1] > 1.15, "anisotropic: {}", ratios[1]);
 }

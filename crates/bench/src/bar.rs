@@ -32,15 +32,21 @@ pub(crate) trait PdMaterial {
     fn model(&self, disc: Discretization) -> Result<Self::Model, PhysicsError>;
 }
 
+/// Chen's material with the scalar calibration (`correction = "calibrated"`): the tables'
+/// "PD" rows, measured before the fitted dilatation became the default.
 impl PdMaterial for ChenMaterial {
     type Model = ChenModel;
 
     fn model(&self, disc: Discretization) -> Result<ChenModel, PhysicsError> {
-        ChenModel::new(disc, std::slice::from_ref(self))
+        let options = ChenOptions {
+            fitted_dilatation: false,
+            ..ChenOptions::default()
+        };
+        ChenModel::with_options(disc, std::slice::from_ref(self), options)
     }
 }
 
-/// Chen's material with the fitted dilatation (`ChenOptions::fitted_dilatation`).
+/// Chen's material with the fitted dilatation (`ChenOptions::fitted_dilatation`, the default).
 #[derive(Debug, Clone)]
 pub(crate) struct FittedChen(pub ChenMaterial);
 

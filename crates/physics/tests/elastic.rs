@@ -77,8 +77,11 @@ fn uniform_dilatation_gives_three_eps_in_the_bulk() {
     ];
     for calibrated in [false, true] {
         let (disc, _, lambda) = block(size, [10, 10, 10], 1.5);
+        // calibrated: the default (the fitted dilatation over the scalar calibration);
+        // uncalibrated: MODEL.md's constants, neither correction
         let opts = ChenOptions {
             calibrated,
+            fitted_dilatation: calibrated,
             ..ChenOptions::default()
         };
         let mut m = ChenModel::with_options(disc, &[steel()], opts).unwrap();
@@ -96,12 +99,18 @@ fn uniform_dilatation_gives_three_eps_in_the_bulk() {
         let (lo, hi) = spread(&inner);
         let (alo, ahi) = spread(&all);
         eprintln!(
-            "calibrated {calibrated}: theta / 3 eps interior ({} particles) {lo:.5}..{hi:.5}, all {alo:.4}..{ahi:.4}",
-            inner.len()
+            "calibrated {calibrated}: theta / 3 eps interior ({} particles) {lo:.5}..{hi:.5}, \
+             all {alo:.4}..{ahi:.4} (1 - least {:.2e}, greatest - 1 {:.2e})",
+            inner.len(),
+            1.0 - alo,
+            ahi - 1.0,
         );
         if calibrated {
-            // c_i = 3 / sum omega r V makes it exact up to rounding of (1 + eps) X products
-            assert!((alo - 1.0).abs() < 1e-9 && (ahi - 1.0).abs() < 1e-9);
+            // the fit makes it exact (a uniform dilatation stretches every bond by the same
+            // factor) but for its ridge, 1e-9 of the moment's diagonal pulling each particle
+            // towards the scalar calibration: measured 1.15e-9 at worst (the scalar
+            // calibration alone: 1e-12)
+            assert!((alo - 1.0).abs() < 1e-8 && (ahi - 1.0).abs() < 1e-8);
         } else {
             // The discrete family sum of V_j / r over the ball of barycentres replaces the
             // integral: every interior Kuhn-lattice particle measured 1.0258 (the lattice is

@@ -75,16 +75,30 @@ fn pull(s_crit: f64, speed: f64, steps: usize) -> (Explicit<ChenModel>, Vec<(u32
 
 #[test]
 fn a_bar_pulled_apart_breaks_into_exactly_two_pieces() {
-    // strain ~ 5.5 / 5060 = 1.1e-3 (more in the stiffer thin calibrated bar) > s_crit = 1e-3
-    // at the jump. Measured pieces against the speed: 4 m/s 1 piece (16 pairs), 5 and 6 m/s
-    // 2 pieces (744 and 1412 pairs; 1028 at 5.5 m/s), 7 m/s 8 pieces (debris at the crack)
+    // strain ~ 5.5 / 5060 = 1.1e-3 > s_crit = 1e-3 at the jump. Measured pieces against the
+    // speed (the default, fitted dilatation): 4 and 5 m/s 1 piece (0 and 514 pairs), 5.5 m/s 2
+    // (1240 pairs), 6 and 6.5 m/s 4, 7 m/s 2. (The scalar calibration: 4 m/s 1 piece, 5 and
+    // 6 m/s 2, 7 m/s 8.)
     let (s, broken) = pull(1e-3, 5.5, 300);
     let m = s.model();
-    // the two pieces are the two halves, split at the plane of the velocity jump
+    // the two pieces are the two halves, split within the cell layer at the plane of the
+    // velocity jump: the crack runs between the tets of the two middle cells (measured: 240
+    // particles each, a tet of each middle cell on the other side, the scalar calibration's
+    // crack exactly on the plane)
     let x = m.discretization().rest_positions();
     let roots = piece_of(m);
     let left = roots[(0..x.len()).find(|&i| x[i][0] < L / 2.0).unwrap()];
-    assert!((0..x.len()).all(|i| (roots[i] == left) == (x[i][0] < L / 2.0)));
+    let cell = L / 20.0;
+    assert!((0..x.len())
+        .filter(|&i| (x[i][0] - L / 2.0).abs() > cell)
+        .all(|i| (roots[i] == left) == (x[i][0] < L / 2.0)));
+    let on_left = (0..x.len()).filter(|&i| roots[i] == left).count();
+    assert_eq!(
+        2 * on_left,
+        x.len(),
+        "the halves have {on_left} of {}",
+        x.len()
+    );
     eprintln!(
         "{} pairs broken by step {}, {} pieces",
         broken.len(),
@@ -143,7 +157,7 @@ fn impact(alpha: f64) -> usize {
 #[test]
 fn larger_alpha_breaks_fewer_bonds_in_the_same_impact() {
     let counts: Vec<usize> = [0.0, 2.0, 10.0].iter().map(|&a| impact(a)).collect();
-    // measured: 8090, 5498 and 2764 pairs
+    // measured: 7736, 5334 and 2894 pairs (the scalar calibration: 8090, 5498 and 2764)
     eprintln!("broken pairs for alpha 0, 2, 10: {counts:?}");
     assert!(counts[0] > counts[1] && counts[1] > counts[2]);
     assert!(counts[2] > 0);

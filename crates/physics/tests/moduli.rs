@@ -43,18 +43,26 @@ const MODEL_MD: ChenOptions = ChenOptions {
     fitted_dilatation: false,
 };
 
+/// The scalar calibration alone (`correction = "calibrated"`, the default before issue 18).
+const SCALAR: ChenOptions = ChenOptions {
+    energy_consistent: true,
+    calibrated: true,
+    fitted_dilatation: false,
+};
+
 #[test]
 fn uniaxial_tension_moduli_improve_with_refinement() {
-    // Calibrated model (the default), nu = 0.25, k = 1.5. Bars of a 0.02 m section are only two
-    // to four horizons across, so the cut families near the surface dominate: measured
-    // E / E0 = 1.1617 and nu = 0.2750 at [16, 4, 4], 1.0864 and 0.2655 at [24, 6, 6] (1.0501 and
-    // 0.2631 at [32, 8, 8], see the ignored study). Bounds: the measured errors plus a margin,
-    // and strictly smaller errors on the finer bar.
+    // The default model (the fitted dilatation), nu = 0.25, k = 1.5. Bars of a 0.02 m section
+    // are only two to four horizons across, so the cut families near the surface dominate:
+    // measured E / E0 = 1.0626 and nu = 0.2146 at [16, 4, 4], 1.0214 and 0.2290 at [24, 6, 6]
+    // (the scalar calibration: 1.1617 and 0.2750, 1.0864 and 0.2655; 1.0501 and 0.2631 at
+    // [32, 8, 8], see the ignored study). Bounds: the measured errors plus a margin of about
+    // half, and strictly smaller errors on the finer bar.
     let (e1, n1) = tension([16, 4, 4], 1.5, 0.25, ChenOptions::default());
     let (e2, n2) = tension([24, 6, 6], 1.5, 0.25, ChenOptions::default());
     eprintln!("[16, 4, 4]: E/E0 {e1:.4}, nu {n1:.4}; [24, 6, 6]: E/E0 {e2:.4}, nu {n2:.4}");
-    assert!((e1 - 1.0).abs() < 0.2 && (n1 - 0.25).abs() < 0.04);
-    assert!((e2 - 1.0).abs() < 0.1 && (n2 - 0.25).abs() < 0.03);
+    assert!((e1 - 1.0).abs() < 0.1 && (n1 - 0.25).abs() < 0.05);
+    assert!((e2 - 1.0).abs() < 0.035 && (n2 - 0.25).abs() < 0.03);
     assert!((e2 - 1.0).abs() < (e1 - 1.0).abs() && (n2 - 0.25).abs() < (n1 - 0.25).abs());
 }
 
@@ -70,7 +78,8 @@ fn uniaxial_tension_with_model_md_constants_is_soft_near_surfaces() {
 #[test]
 #[ignore = "slow (~2.5 min on 2 cores): convergence study of the measured moduli"]
 fn moduli_convergence_study() {
-    // Measured (E / E0, nu) for nu0 = 0.1 / 0.25 / 0.4, calibrated:
+    // Measured (E / E0, nu) for nu0 = 0.1 / 0.25 / 0.4, the scalar calibration (the fitted
+    // dilatation, the default: tests/fitted.rs's study):
     //   k 1.0: [16,4,4] 1.134 0.087 / 1.158 0.256 / 1.188 0.430
     //          [24,6,6] 1.070 0.093 / 1.083 0.251 / 1.102 0.410
     //          [32,8,8] 1.047 0.098 / 1.056 0.253 / 1.071 0.408
@@ -87,7 +96,7 @@ fn moduli_convergence_study() {
         for nu in [0.1, 0.25, 0.4] {
             let mut errors = Vec::new();
             for cells in [[16, 4, 4], [24, 6, 6], [32, 8, 8]] {
-                let (e, n) = tension(cells, k, nu, ChenOptions::default());
+                let (e, n) = tension(cells, k, nu, SCALAR);
                 let (m_e, m_n) = tension(cells, k, nu, MODEL_MD);
                 eprintln!(
                     "{cells:?} k {k} nu0 {nu}: calibrated E/E0 {e:.4} nu {n:.4}; MODEL.md E/E0 {m_e:.4} nu {m_n:.4}"
@@ -153,9 +162,10 @@ fn pulse_speed(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> f64 {
 #[ignore = "documents the thin-bar surface effect on the wave speed"]
 fn pulse_speed_in_a_thin_bar() {
     // A 3 x 3 cell section is 1.5 horizons across, so every particle is a surface particle and
-    // the bar is as stiff as its calibrated surface (E_eff ~ 1.2 E0): measured c / sqrt(E/rho)
-    // = 1.1000 (k = 1, nu = 0.25). The 5% check is on the thicker bar below.
-    let r = pulse_speed([160, 3, 3], 1.0, 0.25, ChenOptions::default());
+    // with the scalar calibration the bar is as stiff as its calibrated surface (E_eff ~ 1.2
+    // E0): measured c / sqrt(E/rho) = 1.1000 (k = 1, nu = 0.25). The 5% check is on the
+    // thicker bar below.
+    let r = pulse_speed([160, 3, 3], 1.0, 0.25, SCALAR);
     eprintln!("[160, 3, 3] k 1: c / sqrt(E/rho) = {r:.4}");
     assert!((r - 1.0).abs() < 0.12);
 }
@@ -163,9 +173,10 @@ fn pulse_speed_in_a_thin_bar() {
 #[test]
 fn pulse_speed_within_five_percent() {
     // A 1 m bar with a 4 x 4 cm section (76,800 particles, ~12 s here). Measured c / sqrt(E/rho)
-    // (calibrated, nu = 0.25): [200,8,8] k 1.0: 1.0280; thinner bars are stiffer from their
-    // calibrated surface: [160,4,4] k 1.5: 1.0743, [160,3,3] k 1.0: 1.1000. With MODEL.md's
-    // uniform constants the thin bars are soft: 0.881 and 0.867.
+    // (nu = 0.25): [200,8,8] k 1.0: 1.0105 (the default, fitted), 1.0280 (the scalar
+    // calibration); thinner bars are stiffer from their calibrated surface (scalar:
+    // [160,4,4] k 1.5: 1.0743, [160,3,3] k 1.0: 1.1000). With MODEL.md's uniform constants the
+    // thin bars are soft: 0.881 and 0.867.
     let r = pulse_speed([200, 8, 8], 1.0, 0.25, ChenOptions::default());
     eprintln!("[200, 8, 8] k 1: c / sqrt(E/rho) = {r:.4}");
     assert!((r - 1.0).abs() < 0.05);

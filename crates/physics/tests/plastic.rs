@@ -29,7 +29,8 @@ fn plastic_model(gamma_y: f64, cap: f64, opts: ChenOptions) -> ChenModel {
     ChenModel::with_options(disc, &[mat], opts).unwrap()
 }
 
-/// The default (calibrated) options: pure pressure never reaches the yield test.
+/// The default options (the fitted dilatation over the calibration): pure pressure never
+/// reaches the yield test.
 fn calibrated() -> ChenOptions {
     ChenOptions::default()
 }
@@ -179,7 +180,8 @@ fn sheared_past_yield_keeps_a_permanent_set() {
     let (disc, _, _) = block([SIZE; 3], [CELLS; 3], 1.5);
     let elastic = permanent_set(ChenModel::new(disc, &[steel()]).unwrap());
     eprintln!("set / applied: plastic {plastic:.3}, elastic {elastic:.3}");
-    // measured: plastic keeps 0.833 of the 2% shear; the elastic block springs back to ~1e-15
+    // measured: plastic keeps 0.852 of the 2% shear (0.833 with the scalar calibration); the
+    // elastic block springs back to ~1e-15
     assert!(plastic > 0.5);
     assert!(elastic.abs() < 0.05);
 }
@@ -246,13 +248,16 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
     }
     // The surface yields early, at 0.99 of the onset, with the same limit for every particle
     // (the yield strain converted with MODEL.md's b while the surface's b_i is larger), and
-    // with the scalar calibration, the default (its dilatation reads the edges' shear as volume
+    // with the scalar calibration alone (its dilatation reads the edges' shear as volume
     // change).
     let mut same_limit = mat.clone();
     if let Some(p) = &mut same_limit.plasticity {
         p.from_strain = false;
     }
-    let scalar = ChenOptions::default();
+    let scalar = ChenOptions {
+        fitted_dilatation: false,
+        ..ChenOptions::default()
+    };
     for (name, material, opts) in [
         ("one limit for all", &same_limit, fitted),
         ("scalar calibration", &mat, scalar),

@@ -178,8 +178,8 @@ pub struct SimulationSpec {
     /// Implicit: refactor the step matrix when this share of the bonds broke since the last
     /// factorisation (default 0.02).
     pub refactor_share: Option<f64>,
-    /// Chen: how the constants meet the discrete family: `"calibrated"` (default: scalars
-    /// per particle), `"fitted"` (the dilatation fitted per bond, `b` calibrated) or `"none"`
+    /// Chen: how the constants meet the discrete family: `"fitted"` (default: the dilatation
+    /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle) or `"none"`
     /// (MODEL.md's constants).
     pub correction: Option<String>,
     /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.

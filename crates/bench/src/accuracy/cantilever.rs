@@ -252,8 +252,10 @@ pub fn cantilever(
          (P1) lock in bending. Peridynamics relaxes dynamically (critical damping of the first \
          bending mode, 12 time constants, a clamp layer one horizon thick behind x = 0); the \
          tip moved by at most {:.1e} of itself over the last tenth of the relaxation. \
-         \"PD fitted\" rows fit each particle's dilatation weights to read every homogeneous \
-         strain exactly (`correction = \"fitted\"`, docs/DECISIONS.md). Rows without a mesh \
+         \"PD\" rows scale each particle's constants to its family (`correction = \
+         \"calibrated\"`, the default before issue 18); \"PD fitted\" rows fit each particle's \
+         dilatation weights to read every homogeneous strain exactly (`correction = \
+         \"fitted\"`, the default, docs/DECISIONS.md). Rows without a mesh \
          named are on the Kuhn lattice (every cell the same six tets); \"mirrored\" rows cut \
          every other cell along each axis as the mirror image of its neighbour \
          (`structure = \"mirrored\"`), \"unstructured\" rows are the scenes' default mesh \

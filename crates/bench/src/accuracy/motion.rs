@@ -306,8 +306,9 @@ fn motion_case(
          diagonal, and halving the step there moves it by {:.4}%: for second-order elements \
          the reference's own error is then at most {:.3}%, under a tenth of {resolved} of the \
          {} peridynamic deviations (those above {:.2}%). Besides Chen's model (the paper's, \
-         stepped explicitly on the Kuhn lattice; \"fitted\" rows with the fitted dilatation of \
-         `correction = \"fitted\"` at k = 1.5, \"unstructured\" rows on the scenes' default \
+         stepped explicitly on the Kuhn lattice with the scalar calibration, `correction = \
+         \"calibrated\"`; \"fitted\" rows with the fitted dilatation of `correction = \
+         \"fitted\"`, the default, at k = 1.5, \"unstructured\" rows on the scenes' default \
          box, Delaunay tets of well-spaced random points, seed 1), Xu's neo-Hookean-like model with the same E and nu (consistent \
          moduli) runs explicitly and implicitly at {}, {} and {} steps per 1/24 s frame ({}, \
          {} and {} steps over the {} s; the scene's implicit defaults, tolerance 1e-4 and at \

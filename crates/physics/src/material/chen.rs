@@ -2,7 +2,9 @@
 //! Decisions: `Lambda = 1`, `ed = e - theta r / 3`, return-map increment `/(4 omega b)`,
 //! threshold-scaled fracture).
 
-use super::fit::{dilatation_weights, fit_tensors, Correction, Spread};
+use super::fit::{
+    anisotropic_target, dilatation_weights, fit_tensors, Correction, Spread, ISOTROPIC_TARGET,
+};
 use super::kernel::{
     dilatation, dilatation_breaking, energy_density, force, return_map, AllAlive, Fitted, Inputs,
     Isotropic, Mask, NoPlastic, PerBond, WithPlastic,
@@ -15,7 +17,6 @@ use crate::math::{mat_vec, norm, sub, Vec3, IDENTITY};
 use crate::par::{for_rows_mut, map_particles};
 use crate::particles::Discretization;
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
-use std::borrow::Cow;
 use std::f64::consts::PI;
 
 /// Choices of the Chen model fixed at setup.
@@ -39,7 +40,7 @@ pub struct ChenOptions {
     /// (corners most), which raises `omega_max`: 7.89e5 to 1.23e6 rad/s on a 3 x 3 x 3-cell
     /// steel block at k = 1.5, so the stable step shrinks by a third.
     pub calibrated: bool,
-    /// Fitted dilatation weights (`fit.rs`): each bond's dilatation weight becomes
+    /// Fitted dilatation weights (`fit.rs`; default on): each bond's dilatation weight becomes
     /// `omega_ij (n n : L_i)` with one symmetric tensor `L_i` per particle fitted so that every
     /// homogeneous small strain gives `theta_i = tr(eps)` on every particle, cut families
     /// included (the scalar `c_i` gets only the trace right: on unevenly cut families it reads
@@ -68,7 +69,7 @@ impl Default for ChenOptions {
         ChenOptions {
             energy_consistent: true,
             calibrated: true,
-            fitted_dilatation: false,
+            fitted_dilatation: true,
         }
     }
 }
@@ -121,24 +122,6 @@ fn family_moments(disc: &Discretization, w: Option<&[f64]>, i: usize) -> (f64, f
         let wv = wk * disc.volumes()[fam.neighbours()[k] as usize];
         (m1 + wv * r, m2 + wv * r * r)
     })
-}
-
-/// Every bond's `omega` (`delta / r`, or the anisotropic weights `w` when given), as the fit
-/// reads them.
-fn bond_weights<'a>(disc: &Discretization, w: Option<&'a [f64]>) -> Cow<'a, [f64]> {
-    match w {
-        Some(w) => Cow::Borrowed(w),
-        None => {
-            let delta = disc.horizon();
-            Cow::Owned(
-                disc.family()
-                    .rest_lengths()
-                    .iter()
-                    .map(|r| delta / r)
-                    .collect(),
-            )
-        }
-    }
 }
 
 /// Binds `$w` (weights) and `$d` (damage mask) to concrete view types and expands `$body` once
@@ -263,7 +246,6 @@ impl ChenModel {
         let dil_weights = match options.fitted_dilatation {
             true => {
                 let x = disc.rest_positions();
-                let w = bond_weights(&disc, weights.as_deref());
                 // fitted around the calibrated scalar 3 / sum omega r V whether or not the
                 // constants are calibrated, then over the particle's own c_i
                 let s: Vec<f64> = (0..n)
@@ -272,15 +254,25 @@ impl ChenModel {
                         _ => c0,
                     })
                     .collect();
-                let l = fit_tensors(fam, x, disc.volumes(), &w, &s, FIT_RIDGE);
-                let mut d = dilatation_weights(fam, x, &w, &l, &s, FIT_BOUND);
-                for i in 0..n {
-                    for k in fam.range(i) {
-                        d[k] *= s[i] / c_theta[i];
-                    }
-                }
-                // each bond carries its reverse's weight too: the force loop then reads both
-                // in one stream (the reverse index is built here only when nothing keeps it)
+                // each material's target: I, or the dilatation its anisotropy reads
+                let targets: Vec<[f64; 6]> = materials
+                    .iter()
+                    .map(|m| match m.anisotropy {
+                        Some(g) if g != IDENTITY => anisotropic_target(&g),
+                        _ => ISOTROPIC_TARGET,
+                    })
+                    .collect();
+                let target: Vec<[f64; 6]> = (0..n)
+                    .map(|i| targets[disc.materials()[i] as usize])
+                    .collect();
+                let w = weights.as_deref();
+                let l = fit_tensors(fam, x, disc.volumes(), w, delta, &s, &target, FIT_RIDGE);
+                let scale: Vec<f64> = (0..n).map(|i| s[i] / c_theta[i]).collect();
+                // each bond carries its reverse's weight too, so the force loop reads both in
+                // one stream; filled in place (the reverse index is built here only when
+                // nothing keeps it), no other per-bond array is allocated
+                let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
+                dilatation_weights(fam, x, w, delta, &l, &s, FIT_BOUND, &scale, &mut pairs);
                 let own_rev;
                 let rev = match &reverse {
                     Some(r) => r,
@@ -289,12 +281,10 @@ impl ChenModel {
                         &own_rev
                     }
                 };
-                Some(
-                    d.iter()
-                        .zip(rev)
-                        .map(|(&dk, &r)| [dk, d[r as usize]])
-                        .collect(),
-                )
+                for (k, &r) in rev.iter().enumerate() {
+                    pairs[k][1] = pairs[r as usize][0];
+                }
+                Some(pairs)
             }
             false => None,
         };

@@ -2,7 +2,9 @@
 #![allow(dead_code)]
 
 use perifrac_physics::math::{add, mat_vec, norm, sub, Mat3, Vec3};
-use perifrac_physics::{ChenMaterial, ChenModel, Discretization, FamilyReport, ForceModel};
+use perifrac_physics::{
+    ChenMaterial, ChenModel, ChenOptions, Discretization, FamilyReport, ForceModel,
+};
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
 
@@ -25,6 +27,18 @@ pub fn block(size: [f64; 3], cells: [usize; 3], k: f64) -> (Discretization, Fami
 /// Steel-like test material: E = 200 GPa, nu = 0.25, rho = 7800 kg/m^3.
 pub fn steel() -> ChenMaterial {
     ChenMaterial::from_young_poisson(200e9, 0.25, 7800.0).expect("valid")
+}
+
+/// An elastic Chen model on a block, with the scalar calibration (the fitted dilatation off):
+/// the model the tests that use it measured their figures on.
+pub fn scalar_block(cells: [usize; 3], k: f64) -> ChenModel {
+    let size = cells.map(|c| c as f64 * 0.01);
+    let (disc, _, _) = block(size, cells, k);
+    let options = ChenOptions {
+        fitted_dilatation: false,
+        ..ChenOptions::default()
+    };
+    ChenModel::with_options(disc, &[steel()], options).expect("model")
 }
 
 /// An elastic Chen model on a block.

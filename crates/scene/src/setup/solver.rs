@@ -136,19 +136,20 @@ pub(super) fn model(
             }
             let base = ChenOptions::default();
             let options = match sim.correction.as_deref() {
-                None | Some("calibrated") => base,
-                Some("fitted") => ChenOptions {
-                    fitted_dilatation: true,
+                None | Some("fitted") => base,
+                Some("calibrated") => ChenOptions {
+                    fitted_dilatation: false,
                     ..base
                 },
                 Some("none") => ChenOptions {
                     calibrated: false,
+                    fitted_dilatation: false,
                     ..base
                 },
                 Some(other) => {
                     return Err(ctx.err(
                         "simulation.correction",
-                        format!("\"{other}\": expected \"calibrated\", \"fitted\" or \"none\""),
+                        format!("\"{other}\": expected \"fitted\", \"calibrated\" or \"none\""),
                     ))
                 }
             };
