@@ -164,7 +164,7 @@ pub fn cantilever(
         runs.push(finite_elements(nx, false)?);
     }
     let mut residual: f64 = 0.0;
-    // (k, fitted, mesh): the default calibration at every factor, then at 1.5 the fitted
+    // (k, fitted, mesh): the scalar calibration at every factor, then at 1.5 the fitted
     // dilatation and both on the mirrored lattice and on unstructured tets
     let kuhn = Cut::Lattice(Lattice::Kuhn);
     let mirrored = Cut::Lattice(Lattice::Mirrored);

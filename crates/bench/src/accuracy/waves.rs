@@ -109,7 +109,7 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
         Effort::Full => (&[16, 24, 32], &HORIZON_FACTORS),
     };
     let mut runs = Vec::new();
-    // (horizon factor, fitted dilatation): the default calibration at every factor, the fitted
+    // (horizon factor, fitted dilatation): the scalar calibration at every factor, the fitted
     // dilatation at the 1.5
     let variants: Vec<(f64, bool)> = factors
         .iter()
