@@ -8,13 +8,13 @@ use perifrac_physics::{
 };
 use perifrac_topology::mesher::box_cut_data;
 pub(crate) use perifrac_topology::mesher::BoxCut as Cut;
-
-/// Seed of the bench's unstructured bars' points (the scenes' default, `defaults::MESH_SEED`).
-pub(crate) const UNSTRUCTURED_SEED: u64 = 1;
 use perifrac_topology::primitives::Lattice;
 use perifrac_topology::TetMesh;
 
 use crate::error::BenchError;
+
+/// Seed of the bench's unstructured bars' points (the scenes' default, `defaults::MESH_SEED`).
+pub(crate) const UNSTRUCTURED_SEED: u64 = 1;
 
 /// An upper bound on the mean edge length of a Kuhn lattice over its cube side: the 7 edges a
 /// cube owns in an infinite lattice (3 sides, 3 face diagonals, a body diagonal) average 1.282;

@@ -57,7 +57,7 @@ fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, 
     let n = cells_across(nx);
     let h = LENGTH / nx as f64;
     let case = format!("cantilever PD {nx}x{n}x{n} k={k}");
-    let m = material(&case)?;
+    let m = material(&case, POISSON)?;
     let (b, held) = if fitted {
         clamped_bar(&case, LENGTH, SIDE, nx, k, &FittedChen(m), cut)?
     } else {

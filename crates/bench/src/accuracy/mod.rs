@@ -40,9 +40,10 @@ const POISSON: f64 = 0.3;
 /// Density (kg/m^3) of every case's material.
 const DENSITY: f64 = 1000.0;
 
-/// The material of [`YOUNG`], [`POISSON`] and [`DENSITY`]; a refusal is an error of `case`.
-fn material(case: &str) -> Result<ChenMaterial, BenchError> {
-    ChenMaterial::from_young_poisson(YOUNG, POISSON, DENSITY).map_err(|cause| BenchError::Physics {
+/// The material of [`YOUNG`], Poisson's ratio `nu` (the cases' [`POISSON`] unless a case
+/// sweeps it) and [`DENSITY`]; a refusal is an error of `case`.
+fn material(case: &str, nu: f64) -> Result<ChenMaterial, BenchError> {
+    ChenMaterial::from_young_poisson(YOUNG, nu, DENSITY).map_err(|cause| BenchError::Physics {
         case: case.into(),
         cause,
     })

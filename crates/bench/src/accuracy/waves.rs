@@ -7,9 +7,11 @@
 
 use std::time::Instant;
 
-use perifrac_physics::{ChenMaterial, ChenModel, Explicit, Loads};
+use perifrac_physics::{ChenModel, Explicit, Loads};
 
-use super::{table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, POISSON, SIDE, YOUNG};
+use super::{
+    material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, POISSON, SIDE, YOUNG,
+};
 use crate::bar::{block, fit_line, rest_of, set_velocities, Body, FittedChen};
 use crate::table::Table;
 use crate::{BenchError, Effort};
@@ -26,12 +28,7 @@ fn bar(
     nu: f64,
 ) -> Result<Body, BenchError> {
     let n = (nx / per_cell_across).max(1);
-    let m = ChenMaterial::from_young_poisson(YOUNG, nu, DENSITY).map_err(|cause| {
-        BenchError::Physics {
-            case: case.into(),
-            cause,
-        }
-    })?;
+    let m = material(case, nu)?;
     if fitted {
         block(case, [len, SIDE, SIDE], [nx, n, n], k, &FittedChen(m))
     } else {

@@ -243,51 +243,45 @@ impl ChenModel {
         let reverse = (anisotropic || plastic).then(|| fam.reverse_index());
         // d_ij / c_i, so that theta_i = c_i sum_j (d_ij / c_i) e_ij V_j keeps the kernel's form
         // (omega_ij times the fit's factor on the scalar calibration, bounded by FIT_BOUND)
-        let dil_weights = match options.fitted_dilatation {
-            true => {
-                let x = disc.rest_positions();
-                // fitted around the calibrated scalar 3 / sum omega r V whether or not the
-                // constants are calibrated, then over the particle's own c_i
-                let s: Vec<f64> = (0..n)
-                    .map(|i| match moments[i].0 {
-                        m1 if m1 > 0.0 => 3.0 / m1,
-                        _ => c0,
-                    })
-                    .collect();
-                // each material's target: I, or the dilatation its anisotropy reads
-                let targets: Vec<[f64; 6]> = materials
-                    .iter()
-                    .map(|m| match m.anisotropy {
-                        Some(g) if g != IDENTITY => anisotropic_target(&g),
-                        _ => ISOTROPIC_TARGET,
-                    })
-                    .collect();
-                let target: Vec<[f64; 6]> = (0..n)
-                    .map(|i| targets[disc.materials()[i] as usize])
-                    .collect();
-                let w = weights.as_deref();
-                let l = fit_tensors(fam, x, disc.volumes(), w, delta, &s, &target, FIT_RIDGE);
-                let scale: Vec<f64> = (0..n).map(|i| s[i] / c_theta[i]).collect();
-                // each bond carries its reverse's weight too, so the force loop reads both in
-                // one stream; filled in place (the reverse index is built here only when
-                // nothing keeps it), no other per-bond array is allocated
-                let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
-                dilatation_weights(fam, x, w, delta, &l, &s, FIT_BOUND, &scale, &mut pairs);
-                let own_rev;
-                let rev = match &reverse {
-                    Some(r) => r,
-                    None => {
-                        own_rev = fam.reverse_index();
-                        &own_rev
-                    }
-                };
-                for (k, &r) in rev.iter().enumerate() {
-                    pairs[k][1] = pairs[r as usize][0];
+        let dil_weights = options.fitted_dilatation.then(|| {
+            let x = disc.rest_positions();
+            // fitted around the calibrated scalar 3 / sum omega r V whether or not the
+            // constants are calibrated, then over the particle's own c_i
+            let s: Vec<f64> = (0..n)
+                .map(|i| match moments[i].0 {
+                    m1 if m1 > 0.0 => 3.0 / m1,
+                    _ => c0,
+                })
+                .collect();
+            // each material's target: I, or the dilatation its anisotropy reads
+            let targets: Vec<[f64; 6]> = materials
+                .iter()
+                .map(|m| match m.anisotropy {
+                    Some(g) if g != IDENTITY => anisotropic_target(&g),
+                    _ => ISOTROPIC_TARGET,
+                })
+                .collect();
+            let w = weights.as_deref();
+            let target = (targets.as_slice(), disc.materials());
+            let l = fit_tensors(fam, x, disc.volumes(), w, delta, &s, target, FIT_RIDGE);
+            // each bond carries its reverse's weight too, so the force loop reads both in
+            // one stream; filled in place (the reverse index is built here only when
+            // nothing keeps it), no other per-bond array is allocated
+            let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
+            dilatation_weights(fam, x, w, delta, &l, &s, FIT_BOUND, &c_theta, &mut pairs);
+            let own_rev;
+            let rev = match &reverse {
+                Some(r) => r,
+                None => {
+                    own_rev = fam.reverse_index();
+                    &own_rev
                 }
-                Some(pairs)
+            };
+            for (k, &r) in rev.iter().enumerate() {
+                pairs[k][1] = pairs[r as usize][0];
             }
-            false => None,
-        };
+            pairs
+        });
         let yield_params = plastic.then(|| {
             (0..n)
                 .map(|i| {

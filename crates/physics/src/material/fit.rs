@@ -85,11 +85,6 @@ fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
     Some(b)
 }
 
-/// The Mandel vector `l_i` of every particle's fitted tensor `L_i`: the family's moment
-/// `A_i = sum_j omega_ij r_ij V_j q q^T` (rest directions `n = (X_j - X_i) / r`, deviatoric weights
-/// `w`), ridged by `ridge` times its mean diagonal towards `c_i I` (the scalar calibration, `c`),
-/// then solved for `(1, 1, 1, 0, 0, 0)`. A particle whose system has no positive pivot (no bonds)
-/// keeps `c_i I`.
 /// Mandel vector of the identity, the target of an isotropic material.
 pub(crate) const ISOTROPIC_TARGET: [f64; 6] = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
 
@@ -163,8 +158,12 @@ fn omega(w: Option<&[f64]>, delta: f64, rl: &[f64], k: usize) -> f64 {
     w.map_or_else(|| delta / rl[k], |w| w[k])
 }
 
-/// The tensors `L_i` (Mandel vectors) with `sum_j omega r V q q^T L_i = target[i]`, ridged
-/// towards the scalar `c_i I`; `omega` is `w` or, without it, `delta / r`.
+/// The Mandel vector `l_i` of every particle's fitted tensor `L_i`: the family's moment
+/// `A_i = sum_j omega_ij r_ij V_j q q^T` (rest directions `n = (X_j - X_i) / r`, deviatoric
+/// weights `w` or, without them, `delta / r`), ridged by `ridge` times its mean diagonal towards
+/// `c_i I` (the scalar calibration, `c`), then solved for the target of the particle's material
+/// (`targets[material[i]]`: [`ISOTROPIC_TARGET`] or [`anisotropic_target`]). A particle whose
+/// system has no positive pivot (no bonds) keeps `c_i I`.
 // The family, its geometry and weights, the scalars, the targets and the ridge are each the
 // fit's own input.
 #[allow(clippy::too_many_arguments)]
@@ -175,7 +174,7 @@ pub(crate) fn fit_tensors(
     w: Option<&[f64]>,
     delta: f64,
     c: &[f64],
-    target: &[[f64; 6]],
+    (targets, material): (&[[f64; 6]], &[u16]),
     ridge: f64,
 ) -> Vec<[f64; 6]> {
     let mut out = vec![[0.0; 6]; fam.len()];
@@ -199,7 +198,7 @@ pub(crate) fn fit_tensors(
             }
         }
         let tau = ridge * (0..6).map(|p| a[p][p]).sum::<f64>() / 6.0;
-        let mut b = target[i];
+        let mut b = targets[material[i] as usize];
         for p in 0..6 {
             a[p][p] += tau;
             b[p] += tau * scalar[p];
@@ -210,8 +209,8 @@ pub(crate) fn fit_tensors(
 }
 
 /// Per-bond dilatation weights over the scalar calibration, `d_ij / c_i = w_ij g_ij`, with
-/// `g_ij = q(n_ij) . l_i / c_i` the fit's factor, times `scale[i]`, written into `out[k][0]`
-/// (`omega` is `w` or, without it, `delta / r`). A particle whose largest `|g_ij|` passes
+/// `g_ij = q(n_ij) . l_i / c_i` the fit's factor, times `c_i / own[i]` (over the particle's own
+/// constant), written into `out[k][0]` (`omega` is `w` or, without it, `delta / r`). A particle whose largest `|g_ij|` passes
 /// `bound` is blended towards the scalar calibration (`g = 1`): `g' = 1 + a (g - 1)` with the
 /// largest `a <= 1` that keeps every `|g'| <= bound` (its fit is then exact no more).
 // The family, its geometry and weights, the tensors, the scalars and the bound are each the
@@ -225,7 +224,7 @@ pub(crate) fn dilatation_weights(
     l: &[[f64; 6]],
     c: &[f64],
     bound: f64,
-    scale: &[f64],
+    own: &[f64],
     out: &mut [[f64; 2]],
 ) {
     let rl = fam.rest_lengths();
@@ -244,9 +243,10 @@ pub(crate) fn dilatation_weights(
         } else {
             1.0
         };
+        let scale = c[i] / own[i];
         for k in range {
             let d = omega(w, delta, rl, k) * (1.0 + a * (out[k][0] - 1.0));
-            out[k][0] = d * scale[i];
+            out[k][0] = d * scale;
         }
     }
 }
@@ -343,7 +343,6 @@ mod tests {
         let mut worst: f64 = 0.0;
         for i in 0..3 {
             for j in 0..3 {
-                // the turned material's quadrature samples other directions: agreement says
                 worst = worst.max((ar[i][j] - want[i][j]).abs());
             }
         }
