@@ -1,6 +1,6 @@
 //! Maps of a surface's triangles as PNG (the look report's crack faces, as cut and smoothed):
 //! triangles already projected to 2-D, drawn back to front, each filled with a colour for its
-//! value on a blue (0) to red (the top of the scale) ramp; one panel per surface, side by side.
+//! value on a blue (0) to red (the top of the scale) ramp; one panel per surface, in rows.
 
 use std::path::Path;
 
@@ -27,8 +27,10 @@ pub struct Facets {
     pub title: String,
     /// What the colour says, with its unit, and the value at the top of the scale (red).
     pub scale: (String, f64),
-    /// The panels, left to right.
+    /// The panels, left to right and row by row.
     pub panels: Vec<Panel>,
+    /// Rows the panels are laid out in (at least 1; the last may be short).
+    pub rows: usize,
 }
 
 /// The ramp's colour for `share` of the scale (clamped to [0, 1]): blue through green and
@@ -43,8 +45,8 @@ fn ramp(share: f64) -> HSLColor {
 }
 
 impl Facets {
-    /// Draws the panels into `path` (PNG, 450 pixels wide per panel and 520 high), written
-    /// atomically.
+    /// Draws the panels into `path` (PNG, 450 pixels wide and 400 high per panel, with 120
+    /// for the title and the scale), written atomically.
     pub fn write_png(&self, path: &Path) -> Result<(), BenchError> {
         crate::plot::write_png_atomically(path, |tmp| self.draw(tmp))
     }
@@ -82,18 +84,21 @@ impl Facets {
         if self.panels.is_empty() || bounds.iter().any(|b| b[0] > b[1]) || half <= 0.0 {
             return Err(err("nothing to draw".into()));
         }
-        let width = 450 * self.panels.len() as u32;
-        let root = BitMapBackend::new(path, (width, 520)).into_drawing_area();
+        let rows = self.rows.clamp(1, self.panels.len());
+        let columns = self.panels.len().div_ceil(rows);
+        let width = 450 * columns as u32;
+        let height = 400 * rows as u32;
+        let root = BitMapBackend::new(path, (width, height + 120)).into_drawing_area();
         root.fill(&WHITE).map_err(|x| e(&x))?;
         let root = root
             .titled(&self.title, ("sans-serif", 20))
             .map_err(|x| e(&x))?;
-        let (body, legend) = root.split_vertically(400);
+        let (body, legend) = root.split_vertically(height);
         for ((panel, b), area) in self
             .panels
             .iter()
             .zip(&bounds)
-            .zip(body.split_evenly((1, self.panels.len())))
+            .zip(body.split_evenly((rows, columns)))
         {
             let (cx, cy) = (0.5 * (b[0] + b[1]), 0.5 * (b[2] + b[3]));
             let mut chart = ChartBuilder::on(&area)

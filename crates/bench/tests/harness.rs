@@ -314,6 +314,8 @@ fn look_tables_hold_every_case_with_sound_pieces() {
     // faces for each.
     assert_eq!(split.rows.len(), 6);
     assert_eq!(faces.panels.len(), 6);
+    // Every bar is measured once it is in two (a time, not "not by").
+    assert!(split.rows.iter().all(|r| r[3].parse::<f64>().is_ok()));
     assert!(faces
         .panels
         .iter()
