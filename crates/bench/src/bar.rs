@@ -16,6 +16,9 @@ use crate::error::BenchError;
 /// Seed of the bench's unstructured bars' points (the scenes' default, `defaults::MESH_SEED`).
 pub(crate) const UNSTRUCTURED_SEED: u64 = 1;
 
+/// The Kuhn lattice, the mesh of the accuracy cases' long-standing rows.
+pub(crate) const KUHN: Cut = Cut::Lattice(Lattice::Kuhn);
+
 /// An upper bound on the mean edge length of a Kuhn lattice over its cube side: the 7 edges a
 /// cube owns in an infinite lattice (3 sides, 3 face diagonals, a body diagonal) average 1.282;
 /// a finite box has more side edges on its boundary and averages less (1.262 for a 20 x 4 x 20
@@ -226,8 +229,7 @@ pub(crate) fn block<T: PdMaterial>(
     k: f64,
     material: &T,
 ) -> Result<Body<T::Model>, BenchError> {
-    let kuhn = Cut::Lattice(Lattice::Kuhn);
-    cut_body(case, [0.0; 3], size, cells, k, material, kuhn)
+    cut_body(case, [0.0; 3], size, cells, k, material, KUHN)
 }
 
 impl<M: ForceModel> Body<M> {

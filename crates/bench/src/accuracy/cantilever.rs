@@ -19,7 +19,7 @@ use super::{
     POISSON, SIDE, YOUNG,
 };
 use crate::bar::{
-    cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen, UNSTRUCTURED_SEED,
+    cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen, KUHN, UNSTRUCTURED_SEED,
 };
 use crate::table::Table;
 use crate::{BenchError, Effort};
@@ -166,14 +166,13 @@ pub fn cantilever(
     let mut residual: f64 = 0.0;
     // (k, fitted, mesh): the scalar calibration at every factor, then at 1.5 the fitted
     // dilatation and both on the mirrored lattice and on unstructured tets
-    let kuhn = Cut::Lattice(Lattice::Kuhn);
     let mirrored = Cut::Lattice(Lattice::Mirrored);
     let unstructured = Cut::Unstructured(UNSTRUCTURED_SEED);
     let variants: Vec<(f64, bool, Cut)> = factors
         .iter()
-        .map(|&k| (k, false, kuhn))
+        .map(|&k| (k, false, KUHN))
         .chain([
-            (1.5, true, kuhn),
+            (1.5, true, KUHN),
             (1.5, false, mirrored),
             (1.5, true, mirrored),
             (1.5, false, unstructured),

@@ -10,13 +10,12 @@
 use std::time::Instant;
 
 use perifrac_physics::{Implicit, ImplicitConfig, Loads, Solver, Vec3, XuMaterial, XuModel};
-use perifrac_topology::primitives::Lattice;
 
 use super::motion::{Motion, Trajectory, SAMPLES};
 use super::{Run, DENSITY, LENGTH, SIDE};
 use crate::bar::{
     cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, Cut, FittedChen,
-    PdMaterial, UNSTRUCTURED_SEED,
+    PdMaterial, KUHN, UNSTRUCTURED_SEED,
 };
 use crate::BenchError;
 
@@ -90,8 +89,6 @@ fn case_name(motion: Motion, method: Method, nx: usize, k: f64) -> String {
     format!("{} {} {nx}x{n}x{n} k={k}", motion.name(), method.label())
 }
 
-/// The Kuhn lattice, the bars' default mesh.
-const KUHN: Cut = Cut::Lattice(Lattice::Kuhn);
 /// Unstructured tets (the scenes' default box).
 const UNSTRUCTURED: Cut = Cut::Unstructured(UNSTRUCTURED_SEED);
 

@@ -12,10 +12,10 @@ use perifrac_fem::{
 use perifrac_physics::{
     AnchorMotion, Implicit, ImplicitConfig, Loads, PhysicsError, Solver, Vec3, XuMaterial, XuModel,
 };
-use perifrac_topology::primitives::{bar_data, Lattice};
+use perifrac_topology::primitives::bar_data;
 
 use super::{Run, LENGTH, SIDE};
-use crate::bar::{cells_across, held_bar, xu_neo_hookean, Cut};
+use crate::bar::{cells_across, held_bar, xu_neo_hookean, KUHN};
 use crate::fit::affine_at;
 use crate::{BenchError, Effort};
 
@@ -256,7 +256,7 @@ pub(super) fn peridynamics(
         k,
         &material,
         shape == Shape::Twist,
-        Cut::Lattice(Lattice::Kuhn),
+        KUHN,
     )?;
     let bonds = bar.body.bonds();
     let tracked = bar.body.select(|x| x[0] > 0.0 && x[0] < LENGTH);
