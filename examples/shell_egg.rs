@@ -57,10 +57,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         let model = s.shell().model();
-        let m = model.frame(s.shell().positions(), Some(h));
+        let m = model.frame(s.shell().positions(), s.shell().velocities(), Some(h));
         let surface = SurfaceRef {
             crack: Some(&m.crack),
             fragment: Some(&m.piece),
+            normals: Some(&m.normals),
+            velocities: Some(&m.velocities),
             ..SurfaceRef::new(&m.vertices, &m.triangles)
         };
         write_ply(

@@ -76,6 +76,53 @@ fn the_cache_validates_and_matches_every_frame() {
     );
 }
 
+/// A shell scene (the bulb of `data/scenes`, its first 0.4 ms: the ball is through the glass)
+/// with `[output] usd = true` and `fps`, run into `dir/shell`.
+fn shell_run_with_usd(dir: &Path) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(common::repo().join("data/scenes/shell_bulb.toml"))
+        .unwrap()
+        .replace("[output]\n", "[output]\nusd = true\nfps = 30.0\n")
+        .replace("duration = 1.5e-3", "duration = 4e-4");
+    assert!(text.contains("usd = true") && text.contains("duration = 4e-4"));
+    let scene = dir.join("bulb.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("shell");
+    ok(&["run", s(&scene), "-o", s(&out), "--frames", "2"]);
+    out
+}
+
+#[test]
+fn a_shell_run_writes_a_cache_that_matches_its_frames() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = shell_run_with_usd(tmp.path());
+    let cache = out.join("bulb.usda");
+    assert!(cache.is_file(), "the shell run wrote no cache");
+    let text = std::fs::read_to_string(&cache).unwrap();
+    assert!(
+        text.contains("timeCodesPerSecond = 30.0"),
+        "the scene's fps"
+    );
+    // Its frames carry unit normals and velocities for the cache to pass on.
+    let frame = read_ply_frame(&out.join("frames/surface_0002.ply")).unwrap();
+    let normals = frame.normals.expect("normals");
+    assert!(normals
+        .iter()
+        .all(|n| ((n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt() - 1.0).abs() < 1e-6));
+    let velocities = frame.velocities.expect("velocities");
+    assert!(velocities.iter().any(|v| v != &[0.0; 3]));
+    // Its pieces are numbered afresh in each frame: no per-piece layout.
+    let err = fails(&["export", s(&out), "--usd", "--pieces"]);
+    assert!(err.contains("one mesh"), "{err}");
+    if !have_python(&["pxr", "numpy", "plyfile"], "shell USD cache not checked") {
+        return;
+    }
+    let report = check(&out, &cache, false);
+    assert!(
+        report.contains(", 0 errors") && report.contains("frame 2: "),
+        "{report}"
+    );
+}
+
 #[test]
 fn export_refuses_what_it_cannot_write_and_reruns_drop_a_stale_cache() {
     let tmp = tempfile::tempdir().unwrap();

@@ -5,8 +5,8 @@
 Opens the cache, runs every validator USD registers (UsdValidation) and fails on any error;
 then, frame by frame, compares the cache with the PLY frames it was made from (read with
 plyfile): the mesh's points, normals, face counts and indices, crack flags (primvar and the
-two GeomSubsets), fragment ids and texture coordinates exactly, and velocities as the frames'
-times the playback factor (to f32 rounding). With --pieces, each fragment prim's points plus
+two GeomSubsets), fragment ids and texture coordinates (zeros for a shell run's frames, which
+have none) exactly, and velocities as the frames' times the playback factor (to f32 rounding). With --pieces, each fragment prim's points plus
 its translation must give the frame's points of that fragment (to f32 rounding) and only the
 fragments of the frame may be visible. Prints one line per frame and exits non-zero on the
 first mismatch.
@@ -46,7 +46,9 @@ def read_frame(path):
         "points": np.stack([v["x"], v["y"], v["z"]], axis=1).astype(np.float32),
         "normals": np.stack([v["nx"], v["ny"], v["nz"]], axis=1).astype(np.float32),
         "velocities": np.stack([v["vx"], v["vy"], v["vz"]], axis=1).astype(np.float32),
-        "st": np.stack([v["s"], v["t"]], axis=1).astype(np.float32),
+        # A shell frame has no texture coordinates: the cache writes zeros.
+        "st": (np.stack([v["s"], v["t"]], axis=1).astype(np.float32)
+               if "s" in v.dtype.names else np.zeros((len(v), 2), np.float32)),
         "faces": np.stack(f["vertex_indices"]).astype(np.int64),
         "crack": np.asarray(f["crack"], dtype=np.int64),
         "fragment": np.asarray(f["fragment"], dtype=np.int64),

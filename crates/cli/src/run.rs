@@ -377,6 +377,9 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
         s.physics_time.as_secs_f64(),
         s.output_time.as_secs_f64()
     );
+    if let Some((usd, took)) = &s.usd {
+        eprintln!("{}", crate::export::describe(usd, *took));
+    }
     Ok(())
 }
 

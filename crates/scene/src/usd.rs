@@ -40,7 +40,7 @@ use serde::Deserialize;
 
 use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
-use crate::output::{BallJson, Bounds, FrameJson, GroundJson};
+use crate::output::{BallJson, Bounds, DebrisJson, GroundJson};
 
 /// Diffuse colour of the outer surface (linear RGB), as `perifrac render` shades it.
 const OUTSIDE_RGB: [f32; 3] = [0.62, 0.60, 0.55];
@@ -72,18 +72,34 @@ pub struct UsdReport {
     pub meshes: usize,
 }
 
-/// The part of `run.json` the export reads.
+/// The part of `run.json` the export reads: a tet run's or a shell run's.
 #[derive(Debug, Deserialize)]
 struct Manifest {
+    /// `"shell"` for a shell run; absent for a tet run.
+    #[serde(default)]
+    body: Option<String>,
     scene: String,
     up: [f64; 3],
     rest_bounds: Bounds,
     grounds: Vec<GroundJson>,
-    frames: Vec<FrameJson>,
+    frames: Vec<ManifestFrame>,
     #[serde(default)]
     fragments: Vec<FragmentBirth>,
     #[serde(default)]
     fps: Option<f64>,
+}
+
+/// The part of a frame in `run.json` the export reads.
+#[derive(Debug, Deserialize)]
+struct ManifestFrame {
+    index: usize,
+    time: f64,
+    surface: String,
+    #[serde(default)]
+    particles: Option<String>,
+    #[serde(default)]
+    debris: Option<DebrisJson>,
+    balls: Vec<BallJson>,
 }
 
 /// Writes the frames of run directory `dir` as one USD cache at `path` (default
@@ -105,6 +121,13 @@ pub fn export_usd(
         serde_json::from_str(&text).map_err(|e| err(format!("run.json: {e}")))?;
     if manifest.frames.is_empty() {
         return Err(err("run.json lists no frames yet".into()));
+    }
+    if layout == UsdLayout::Pieces && manifest.body.as_deref() == Some("shell") {
+        return Err(err(
+            "a shell run numbers its pieces afresh in every frame, so they cannot be followed \
+             from frame to frame: export it as one mesh (without pieces)"
+                .into(),
+        ));
     }
     let fps = fps.or(manifest.fps).unwrap_or(DEFAULT_FPS);
     if !(fps.is_finite() && fps > 0.0) {

@@ -85,7 +85,7 @@ fn tet_only_keys_are_named_with_what_to_do_instead() {
         ),
         ("[[material]]\ns_crit = 0.1\n", "material[0].s_crit"),
         ("[mesh]\nprimitive = \"box\"\n", "mesh"),
-        ("[output]\nusd = true\n", "output.usd"),
+        ("[output]\nusd_pieces = true\n", "output.usd_pieces"),
     ] {
         // put the key into the table it belongs to
         let (table, line) = extra.split_once('\n').unwrap();

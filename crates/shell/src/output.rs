@@ -7,13 +7,18 @@ use perifrac_physics::math::{add, cross, dot, norm, scale, sub, Vec3};
 use crate::mesh::ShellMesh;
 use crate::model::ShellModel;
 
-/// A triangle surface to write: positions (m), triangles, per triangle whether it lies on a
-/// crack (1) or not (0), and per triangle the id of its piece (pieces numbered by their lowest
-/// triangle, in order).
+/// A triangle surface to write: positions (m), unit normals and velocities (m/s) per vertex,
+/// triangles, per triangle whether it lies on a crack (1) or not (0), and per triangle the id
+/// of its piece (pieces numbered by their lowest triangle, in order).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameMesh {
     /// Vertex positions (m).
     pub vertices: Vec<Vec3>,
+    /// Per vertex unit normal: the area-weighted mean of its triangles' (+z where they have no
+    /// area); the lower sheet of a thickened frame faces the other way.
+    pub normals: Vec<Vec3>,
+    /// Per vertex velocity (m/s): the mid-surface vertex's, on both sheets.
+    pub velocities: Vec<Vec3>,
     /// Triangles as vertex indices, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle: 1 on a crack (a side wall along a crack edge), 0 otherwise.
@@ -58,36 +63,50 @@ pub fn pieces(mesh: &ShellMesh) -> Vec<u32> {
 }
 
 impl ShellModel {
-    /// The frame at positions `x` (m): the triangles as they are (`thickness` `None`), or every
-    /// piece as a closed surface of `thickness` (m): the mid-surface offset by half of it
-    /// each way along the area-weighted vertex normals, the lower sheet turned over, and a wall
-    /// of two triangles along every free edge (flagged as crack where the edge is one).
-    pub fn frame(&self, x: &[Vec3], thickness: Option<f64>) -> FrameMesh {
+    /// The frame at positions `x` (m) and velocities `v` (m/s): the triangles as they are
+    /// (`thickness` `None`), or every piece as a closed surface of `thickness` (m): the
+    /// mid-surface offset by half of it each way along the area-weighted vertex normals, the
+    /// lower sheet turned over, and a wall of two triangles along every free edge (flagged as
+    /// crack where the edge is one).
+    pub fn frame(&self, x: &[Vec3], v: &[Vec3], thickness: Option<f64>) -> FrameMesh {
         let mesh = self.mesh();
         let tris = mesh.triangles();
         let piece = pieces(mesh);
         let cracks = self.crack_edges();
         let is_crack = |f: usize, k: usize| cracks.get(f).is_some_and(|c| c[k]);
+        let n = x.len();
+        let mut sums = vec![[0.0; 3]; n];
+        for tri in tris {
+            let [a, b, c] = tri.map(|i| x[i as usize]);
+            let area_normal = cross(sub(b, a), sub(c, a));
+            for &i in tri {
+                sums[i as usize] = add(sums[i as usize], area_normal);
+            }
+        }
+        let unit: Vec<Vec3> = sums
+            .iter()
+            .map(|nrm| {
+                let l = norm(*nrm);
+                if l > 0.0 && l.is_finite() {
+                    scale(*nrm, 1.0 / l)
+                } else {
+                    [0.0, 0.0, 1.0]
+                }
+            })
+            .collect();
         let Some(t) = thickness.filter(|t| *t > 0.0) else {
             let crack = vec![0u8; tris.len()];
             return FrameMesh {
                 vertices: x.to_vec(),
+                normals: unit.clone(),
+                velocities: v.to_vec(),
                 triangles: tris.to_vec(),
                 crack,
                 piece,
             };
         };
-        let n = x.len();
-        let mut normals = vec![[0.0; 3]; n];
-        for tri in tris {
-            let [a, b, c] = tri.map(|i| x[i as usize]);
-            let area_normal = cross(sub(b, a), sub(c, a));
-            for &i in tri {
-                normals[i as usize] = add(normals[i as usize], area_normal);
-            }
-        }
         // Half the thickness along each unit vertex normal: upper sheet, then lower.
-        let offsets: Vec<Vec3> = normals
+        let offsets: Vec<Vec3> = sums
             .iter()
             .map(|nrm| {
                 let l = norm(*nrm);
@@ -98,6 +117,12 @@ impl ShellModel {
                 }
             })
             .collect();
+        let mut normals = Vec::with_capacity(2 * n);
+        normals.extend_from_slice(&unit);
+        normals.extend(unit.iter().map(|u| scale(*u, -1.0)));
+        let mut velocities = Vec::with_capacity(2 * n);
+        velocities.extend_from_slice(v);
+        velocities.extend_from_slice(v);
         let mut vertices = Vec::with_capacity(2 * n);
         vertices.extend(x.iter().zip(&offsets).map(|(p, o)| add(*p, *o)));
         vertices.extend(x.iter().zip(&offsets).map(|(p, o)| sub(*p, *o)));
@@ -127,6 +152,8 @@ impl ShellModel {
         }
         FrameMesh {
             vertices,
+            normals,
+            velocities,
             triangles,
             crack,
             piece: pieces_out,

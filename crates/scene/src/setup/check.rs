@@ -199,7 +199,19 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
     if f.output.frames == Some(0) {
         return Err(ctx.err("output.frames", "must be at least 1"));
     }
-    if let Some(fps) = f.output.fps {
+    check_fps(ctx, f.output.fps)?;
+    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
+        return Err(ctx.err(
+            "output.usd_pieces",
+            "lays out the USD cache, which is written only with usd = true",
+        ));
+    }
+    Ok(())
+}
+
+/// Checks `[output] fps`: positive and at most [`MAX_FPS`].
+pub(crate) fn check_fps(ctx: &Ctx, fps: Option<f64>) -> Result<(), SceneError> {
+    if let Some(fps) = fps {
         ctx.positive("output.fps", fps, "")?;
         if fps > MAX_FPS {
             return Err(ctx.err(
@@ -207,12 +219,6 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
                 format!("{fps} frames per second is more than {MAX_FPS}"),
             ));
         }
-    }
-    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
-        return Err(ctx.err(
-            "output.usd_pieces",
-            "lays out the USD cache, which is written only with usd = true",
-        ));
     }
     Ok(())
 }

@@ -46,6 +46,8 @@ pub struct ShellManifest {
     pub thickness: f64,
     /// Thickness given to every piece in the frames (m; 0: the mid-surface).
     pub frame_thickness: f64,
+    /// Playback frames per second for caches made from the frames (`[output] fps`).
+    pub fps: f64,
     /// Time step (s).
     pub dt: f64,
     /// Measured stable limit (s).
@@ -141,6 +143,8 @@ pub struct ShellSummary {
     pub self_contact: Option<(f64, u64)>,
     /// Wall time (s) in the contact pass with grounds and balls, discarded trials included.
     pub collider_seconds: f64,
+    /// The USD cache written at the end (`[output] usd`) and the wall time it took.
+    pub usd: Option<(crate::usd::UsdReport, Duration)>,
 }
 
 /// Runs a shell scene to the end, writing frames into `dir` (cleared of an earlier run's
@@ -206,6 +210,22 @@ pub fn run_shell(
             frames_written: index + 1,
         });
     }
+    let usd = if setup.usd {
+        let t = Instant::now();
+        match crate::usd::export_usd(dir, None, crate::usd::UsdLayout::Mesh, None) {
+            Ok(report) => {
+                let took = t.elapsed();
+                output_time += took;
+                Some((report, took))
+            }
+            Err(e) => {
+                let _ = writer.record_error(e.to_string());
+                return Err(e);
+            }
+        }
+    } else {
+        None
+    };
     let s = setup.shell.shell();
     Ok(ShellSummary {
         steps,
@@ -228,6 +248,7 @@ pub fn run_shell(
             (st.total_seconds, st.builds)
         }),
         collider_seconds: s.collider_seconds(),
+        usd,
     })
 }
 
@@ -318,6 +339,7 @@ impl ShellWriter {
             triangles: info.triangles,
             thickness: info.thickness,
             frame_thickness: setup.frame_thickness,
+            fps: setup.fps,
             dt: info.dt,
             dt_limit: info.dt_limit,
             event_levels: info.event_levels,
@@ -370,10 +392,12 @@ impl ShellWriter {
         let model = shell.model();
         let x = shell.positions();
         let thickness = (setup.frame_thickness > 0.0).then_some(setup.frame_thickness);
-        let m = model.frame(x, thickness);
+        let m = model.frame(x, shell.velocities(), thickness);
         let surface = SurfaceRef {
             crack: Some(&m.crack),
             fragment: Some(&m.piece),
+            normals: Some(&m.normals),
+            velocities: Some(&m.velocities),
             ..SurfaceRef::new(&m.vertices, &m.triangles)
         };
         let name = format!("frames/surface_{index:04}.ply");

@@ -152,6 +152,11 @@ pub struct ShellOutputSpec {
     /// Thickness (m) each piece is given in the frames, so renders show shards (default the
     /// shell's thickness; 0 writes the mid-surface).
     pub thickness: Option<f64>,
+    /// Also write the frames as one USD cache, `NAME.usda`, at the end (default false): one
+    /// mesh, as `perifrac export` writes it.
+    pub usd: Option<bool>,
+    /// Playback frames per second of the USD cache (default 24).
+    pub fps: Option<f64>,
 }
 
 /// Keys that tet scenes take and shell scenes do not, as `table.key` (`table` alone for a
@@ -233,16 +238,8 @@ pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
         "shell runs write no checkpoints yet",
     ),
     (
-        "output.usd",
-        "shell runs write PLY and POV-Ray frames; no USD cache yet",
-    ),
-    (
         "output.usd_pieces",
-        "shell runs write PLY and POV-Ray frames; no USD cache yet",
-    ),
-    (
-        "output.fps",
-        "a key of the USD cache, which shell runs do not write yet",
+        "a shell run numbers its pieces afresh in every frame; its USD cache is one mesh",
     ),
     (
         "output.smooth_cracks",

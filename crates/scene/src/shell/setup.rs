@@ -172,6 +172,10 @@ pub struct ShellSetup {
     pub povray: bool,
     /// Thickness (m) given to each piece in the frames (0: the mid-surface).
     pub frame_thickness: f64,
+    /// Whether the run ends by writing its frames as one USD cache.
+    pub usd: bool,
+    /// Playback frames per second of that cache.
+    pub fps: f64,
     /// What was found and chosen.
     pub info: ShellSetupInfo,
 }
@@ -283,6 +287,7 @@ impl ShellSetup {
             Some(t) => ctx.non_negative("output.thickness", t)?,
             None => thickness,
         };
+        crate::setup::check::check_fps(&ctx, f.output.fps)?;
 
         let (vertices, triangles) = surface(&ctx, scene, &f.shell)?;
         let mesh =
@@ -447,6 +452,8 @@ impl ShellSetup {
             steps_per_frame,
             povray: f.output.povray.unwrap_or(true),
             frame_thickness,
+            usd: f.output.usd == Some(true),
+            fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
             info,
         })
     }
