@@ -21,7 +21,7 @@ pub struct FragmentBirth {
 /// The stable fragment ids of a run, updated frame by frame.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct FragmentIds {
-    /// The fragment id of each tet at the last frame.
+    /// The fragment id of each tet (or shell triangle) at the last frame.
     id_of_tet: Vec<u32>,
     /// Every fragment so far, in id order.
     births: Vec<FragmentBirth>,
@@ -31,27 +31,43 @@ impl FragmentIds {
     /// The ids of the pieces of frame `frame` (`ids[piece]`), updating the record. The first
     /// call numbers the pieces as they are.
     pub fn update(&mut self, pieces: &Pieces, frame: usize) -> Vec<u32> {
-        let n = pieces.piece_of_tet.len();
-        if self.id_of_tet.len() != n {
+        if self.id_of_tet.len() != pieces.piece_of_tet.len() {
             // First frame (or a mesh of another size): pieces as they are.
-            self.births = (0..pieces.count as u32)
+            self.births.clear();
+        }
+        self.update_split(&pieces.piece_of_tet, pieces.count, frame, &|t| t)
+    }
+
+    /// [`FragmentIds::update`] for a body whose elements split and append the new ones (a
+    /// shell's triangles): `piece_of[e]` is element `e`'s piece (of `count`), `earlier(e)` the
+    /// element of the last update that `e` was part of (`e` itself for one that existed then).
+    /// The first call numbers the pieces as they are.
+    pub fn update_split(
+        &mut self,
+        piece_of: &[u32],
+        count: usize,
+        frame: usize,
+        earlier: &dyn Fn(usize) -> usize,
+    ) -> Vec<u32> {
+        if self.births.is_empty() {
+            self.births = (0..count as u32)
                 .map(|id| FragmentBirth {
                     id,
                     parent: None,
                     frame,
                 })
                 .collect();
-            self.id_of_tet.clone_from(&pieces.piece_of_tet);
-            return (0..pieces.count as u32).collect();
+            self.id_of_tet = piece_of.to_vec();
+            return (0..count as u32).collect();
         }
-        // The earlier fragment of each piece (that of its lowest tet) and how many pieces
+        // The earlier fragment of each piece (that of its lowest element) and how many pieces
         // each earlier fragment now holds.
-        let mut previous = vec![u32::MAX; pieces.count];
+        let mut previous = vec![u32::MAX; count];
         let mut parts = vec![0u32; self.births.len()];
-        for (t, &p) in pieces.piece_of_tet.iter().enumerate() {
+        for (t, &p) in piece_of.iter().enumerate() {
             let slot = &mut previous[p as usize];
             if *slot == u32::MAX {
-                *slot = self.id_of_tet[t];
+                *slot = self.id_of_tet[earlier(t)];
                 parts[*slot as usize] += 1;
             }
         }
@@ -71,9 +87,7 @@ impl FragmentIds {
                 }
             })
             .collect();
-        for (slot, &p) in self.id_of_tet.iter_mut().zip(&pieces.piece_of_tet) {
-            *slot = ids[p as usize];
-        }
+        self.id_of_tet = piece_of.iter().map(|&p| ids[p as usize]).collect();
         ids
     }
 
@@ -172,6 +186,34 @@ mod tests {
         assert_eq!((b[4].parent, b[4].frame), (Some(1), 3));
         assert_eq!((b[5].parent, b[5].frame), (Some(1), 3));
         assert!(b[..2].iter().all(|f| f.parent.is_none() && f.frame == 0));
+    }
+
+    #[test]
+    fn split_off_elements_take_the_fragment_they_were_part_of() {
+        let mut ids = FragmentIds::default();
+        // Frame 0: triangles {0, 1} and {2}.
+        assert_eq!(ids.update_split(&[0, 0, 1], 2, 0, &|t| t), vec![0, 1]);
+        // Frame 1: triangle 1 split off triangle 3 and triangle 3 triangle 4 (4 -> 3 -> 1);
+        // fragment 0 came apart into {0, 1, 3} and {4}, both new; {2} keeps its id.
+        let from = [0usize, 1, 2, 1, 3];
+        let earlier = |t: usize| {
+            let mut t = t;
+            while t >= 3 {
+                t = from[t];
+            }
+            t
+        };
+        assert_eq!(
+            ids.update_split(&[0, 0, 1, 0, 2], 3, 1, &earlier),
+            vec![2, 1, 3]
+        );
+        let b = ids.births();
+        assert_eq!((b[2].parent, b[3].parent), (Some(0), Some(0)));
+        // Frame 2: nothing new: the same ids, element by element.
+        assert_eq!(
+            ids.update_split(&[0, 0, 1, 0, 2], 3, 2, &|t| t),
+            vec![2, 1, 3]
+        );
     }
 
     #[test]

@@ -72,12 +72,9 @@ pub struct UsdReport {
     pub meshes: usize,
 }
 
-/// The part of `run.json` the export reads: a tet run's or a shell run's.
+/// The part of `run.json` the export reads, a tet run's or a shell run's.
 #[derive(Debug, Deserialize)]
 struct Manifest {
-    /// `"shell"` for a shell run; absent for a tet run.
-    #[serde(default)]
-    body: Option<String>,
     scene: String,
     up: [f64; 3],
     rest_bounds: Bounds,
@@ -122,13 +119,7 @@ pub fn export_usd(
     if manifest.frames.is_empty() {
         return Err(err("run.json lists no frames yet".into()));
     }
-    if layout == UsdLayout::Pieces && manifest.body.as_deref() == Some("shell") {
-        return Err(err(
-            "a shell run numbers its pieces afresh in every frame, so they cannot be followed \
-             from frame to frame: export it as one mesh (without pieces)"
-                .into(),
-        ));
-    }
+
     let fps = fps.or(manifest.fps).unwrap_or(DEFAULT_FPS);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(err(format!(

@@ -70,8 +70,16 @@ fn an_egg_scene_cracks_and_writes_frames_with_pieces_and_crack_walls() {
     // Every piece is a closed slab of the shell's thickness: with cracks, some walls are
     // crack walls.
     assert!(crack.contains(&1));
-    let pieces = fragment.iter().max().map_or(0, |p| p + 1) as usize;
+    let pieces = fragment
+        .iter()
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
     assert_eq!(pieces, summary.fragments);
+    // Fragment ids are stable: each id the frame uses is in run.json's record, and a piece
+    // that split off has the fragment it came from as its parent.
+    let births = run["fragments"].as_array().unwrap();
+    assert!(fragment.iter().all(|&f| (f as usize) < births.len()));
+    assert!(births.iter().skip(1).any(|b| !b["parent"].is_null()));
     assert_eq!(frames[2]["fragments"].as_u64().unwrap() as usize, pieces);
     assert!(dir.path().join("frames/surface_0002.inc").is_file());
 }
@@ -85,7 +93,7 @@ fn tet_only_keys_are_named_with_what_to_do_instead() {
         ),
         ("[[material]]\ns_crit = 0.1\n", "material[0].s_crit"),
         ("[mesh]\nprimitive = \"box\"\n", "mesh"),
-        ("[output]\nusd_pieces = true\n", "output.usd_pieces"),
+        ("[output]\nparticles = true\n", "output.particles"),
     ] {
         // put the key into the table it belongs to
         let (table, line) = extra.split_once('\n').unwrap();

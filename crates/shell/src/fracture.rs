@@ -102,6 +102,9 @@ pub(crate) struct FractureState {
     pub min_edge: f64,
     /// Per triangle, whether its edge opposite each vertex is a crack.
     pub crack: Vec<[bool; 3]>,
+    /// Per triangle, the triangle it was split from (its own index for the shell's own):
+    /// splits append, so it is always lower for a split-off one.
+    pub split_from: Vec<u32>,
 }
 
 /// One triangle that broke.
@@ -174,6 +177,7 @@ struct Edit {
     ps: Vec<[f64; 3]>,
     pphi: Vec<[f64; 3]>,
     crack: Vec<[bool; 3]>,
+    split_from: Vec<u32>,
     added: Vec<[u32; 2]>,
 }
 
@@ -196,6 +200,7 @@ impl Edit {
         self.crack[f] = [crack[ev], true, crack[eb]];
         let u = 1.0 - t;
         self.tris.push([v, q, b]);
+        self.split_from.push(f as u32);
         self.ps.push([u * u * ps[ev], ps[ea], new_edge]);
         self.pphi.push([pphi[ev], pphi[ea], 0.0]);
         self.crack.push([crack[ev], crack[ea], true]);
@@ -235,6 +240,7 @@ impl ShellModel {
             params,
             min_edge: MIN_EDGE_SHARE * shortest,
             crack: vec![[false; 3]; nf],
+            split_from: (0..nf as u32).collect(),
         });
         self
     }
@@ -248,6 +254,14 @@ impl ShellModel {
     /// does not break).
     pub fn crack_edges(&self) -> &[[bool; 3]] {
         self.fracture.as_ref().map_or(&[], |f| &f.crack)
+    }
+
+    /// Per triangle, the triangle it was split from: its own index for a triangle the shell
+    /// started with, a lower one for a triangle a fracture split off (empty for a shell that
+    /// does not break). Following it from a triangle down to an index under an earlier
+    /// triangle count gives the triangle it was part of then.
+    pub fn split_from(&self) -> &[u32] {
+        self.fracture.as_ref().map_or(&[], |f| &f.split_from)
     }
 
     /// Each triangle's largest principal elastic strain on either face of the shell over its
@@ -412,6 +426,7 @@ impl ShellModel {
             ps: pl.s.clone(),
             pphi: pl.phi.clone(),
             crack: fs.crack.clone(),
+            split_from: fs.split_from.clone(),
             added: Vec::new(),
         };
         let mut touched = vec![false; nf];
@@ -576,12 +591,14 @@ impl ShellModel {
                 ps,
                 pphi,
                 crack,
+                split_from,
                 ..
             } = edit;
             let mesh = ShellMesh::new(rest, tris)?;
             self.rebuild(mesh, Some((ps, pphi)))?;
             if let Some(fs) = &mut self.fracture {
                 fs.crack = crack;
+                fs.split_from = split_from;
             }
         }
         // A budge changes the strains of the triangles around the vertex; the plastic offsets

@@ -2,6 +2,7 @@
 
 use std::collections::HashMap;
 
+use perifrac_physics::math::{cross, dot, norm, sub};
 use perifrac_shell::generate::sheet;
 use perifrac_shell::*;
 
@@ -60,24 +61,16 @@ fn a_thick_frame_of_a_broken_sheet_is_closed_with_the_pieces_volume_and_crack_wa
     );
     for i in 0..nv {
         let [a, b] = [thick.normals[i], thick.normals[i + nv]];
-        let length = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-        assert!((length - 1.0).abs() < 1e-12, "{a:?}");
+        assert!((norm(a) - 1.0).abs() < 1e-12, "{a:?}");
         assert_eq!(b, [-a[0], -a[1], -a[2]]);
         assert_eq!(thick.velocities[i], shell.velocities()[i]);
         assert_eq!(thick.velocities[i + nv], shell.velocities()[i]);
     }
     for t in &thin.triangles {
         let [a, b, c] = t.map(|i| shell.positions()[i as usize]);
-        let e1 = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-        let e2 = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-        let face = [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
+        let face = cross(sub(b, a), sub(c, a));
         for &i in t {
-            let n = thin.normals[i as usize];
-            assert!(n[0] * face[0] + n[1] * face[1] + n[2] * face[2] > 0.0);
+            assert!(dot(thin.normals[i as usize], face) > 0.0);
         }
     }
     let n = *thick.piece.iter().max().unwrap() as usize + 1;

@@ -199,18 +199,17 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
     if f.output.frames == Some(0) {
         return Err(ctx.err("output.frames", "must be at least 1"));
     }
-    check_fps(ctx, f.output.fps)?;
-    if f.output.usd_pieces == Some(true) && f.output.usd != Some(true) {
-        return Err(ctx.err(
-            "output.usd_pieces",
-            "lays out the USD cache, which is written only with usd = true",
-        ));
-    }
-    Ok(())
+    check_cache(ctx, f.output.usd, f.output.usd_pieces, f.output.fps)
 }
 
-/// Checks `[output] fps`: positive and at most [`MAX_FPS`].
-pub(crate) fn check_fps(ctx: &Ctx, fps: Option<f64>) -> Result<(), SceneError> {
+/// Checks the USD cache's `[output]` keys: `fps` positive and at most [`MAX_FPS`],
+/// `usd_pieces` only with `usd`.
+pub(crate) fn check_cache(
+    ctx: &Ctx,
+    usd: Option<bool>,
+    usd_pieces: Option<bool>,
+    fps: Option<f64>,
+) -> Result<(), SceneError> {
     if let Some(fps) = fps {
         ctx.positive("output.fps", fps, "")?;
         if fps > MAX_FPS {
@@ -219,6 +218,12 @@ pub(crate) fn check_fps(ctx: &Ctx, fps: Option<f64>) -> Result<(), SceneError> {
                 format!("{fps} frames per second is more than {MAX_FPS}"),
             ));
         }
+    }
+    if usd_pieces == Some(true) && usd != Some(true) {
+        return Err(ctx.err(
+            "output.usd_pieces",
+            "lays out the USD cache, which is written only with usd = true",
+        ));
     }
     Ok(())
 }

@@ -1,7 +1,8 @@
 //! Running a thin-shell scene: steps between frames, frames into a run directory laid out as a
-//! tet run's (`run.json`, `scene.toml`, `frames/surface_NNNN.ply` with per-face `crack` and
-//! `fragment`, `frames/surface_NNNN.inc`), so `perifrac render` reads it as it is. Every file
-//! is written to a temporary name and renamed into place.
+//! tet run's (`run.json`, `scene.toml`, `frames/surface_NNNN.ply` with per-vertex normals and
+//! velocities, per-face `crack` and stable `fragment` ids, `frames/surface_NNNN.inc`), so
+//! `perifrac render` and `perifrac export` read it as they read a tet run's. Every file is
+//! written to a temporary name and renamed into place.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,9 +10,11 @@ use std::time::{Duration, Instant};
 
 use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
 use perifrac_physics::math::{cross, norm, sub};
+use perifrac_shell::output::pieces;
 use serde::Serialize;
 
 use crate::error::SceneError;
+use crate::fragments::{FragmentBirth, FragmentIds};
 use crate::output::{
     clear_output_dir, write_scene_and_frames_dir, BallJson, Bounds, GroundJson, SearchJson,
     POVRAY_MESH_NAME, RUN_FORMAT,
@@ -58,6 +61,9 @@ pub struct ShellManifest {
     pub mass: f64,
     /// Frames written so far.
     pub frames: Vec<ShellFrameJson>,
+    /// Every fragment id the frames used, with the fragment it split from and its first frame
+    /// (a piece keeps its id from the frame it separates until the frame it splits).
+    pub fragments: Vec<FragmentBirth>,
     /// True once the last frame is written.
     pub finished: bool,
     /// Why the run stopped early, if it did.
@@ -210,9 +216,9 @@ pub fn run_shell(
             frames_written: index + 1,
         });
     }
-    let usd = if setup.usd {
+    let usd = if let Some(layout) = setup.usd {
         let t = Instant::now();
-        match crate::usd::export_usd(dir, None, crate::usd::UsdLayout::Mesh, None) {
+        match crate::usd::export_usd(dir, None, layout, None) {
             Ok(report) => {
                 let took = t.elapsed();
                 output_time += took;
@@ -303,6 +309,10 @@ fn stop(writer: &mut ShellWriter, at: &Progress, cause: String) -> SceneError {
 struct ShellWriter {
     dir: PathBuf,
     manifest: ShellManifest,
+    /// Stable fragment ids of the mesh's triangles.
+    ids: FragmentIds,
+    /// Triangles of the mesh at the last frame.
+    triangles_before: usize,
 }
 
 impl ShellWriter {
@@ -345,12 +355,15 @@ impl ShellWriter {
             event_levels: info.event_levels,
             mass: info.mass,
             frames: Vec::new(),
+            fragments: Vec::new(),
             finished: false,
             error: None,
         };
         let mut writer = ShellWriter {
             dir: dir.to_path_buf(),
             manifest,
+            ids: FragmentIds::default(),
+            triangles_before: 0,
         };
         writer.write_manifest()?;
         let rest = write_scene_and_frames_dir(dir, &setup.scene_text);
@@ -393,9 +406,31 @@ impl ShellWriter {
         let x = shell.positions();
         let thickness = (setup.frame_thickness > 0.0).then_some(setup.frame_thickness);
         let m = model.frame(x, shell.velocities(), thickness);
+        // Stable ids: a triangle split off since the last frame takes the fragment of the
+        // triangle it was part of then (splits append, so following `split_from` down to an
+        // index under the last frame's count finds it).
+        let mesh_pieces = pieces(model.mesh());
+        let count = mesh_pieces.iter().max().map_or(0, |p| *p as usize + 1);
+        let (from, before) = (model.split_from(), self.triangles_before);
+        let earlier = |t: usize| {
+            let mut t = t;
+            while t >= before {
+                match from.get(t) {
+                    Some(&f) if (f as usize) < t => t = f as usize,
+                    // not reached: a triangle past the last frame's count was split off
+                    // a lower one
+                    _ => return 0,
+                }
+            }
+            t
+        };
+        let ids = self.ids.update_split(&mesh_pieces, count, index, &earlier);
+        self.triangles_before = mesh_pieces.len();
+        self.manifest.fragments = self.ids.births().to_vec();
+        let fragment: Vec<u32> = m.piece.iter().map(|&p| ids[p as usize]).collect();
         let surface = SurfaceRef {
             crack: Some(&m.crack),
-            fragment: Some(&m.piece),
+            fragment: Some(&fragment),
             normals: Some(&m.normals),
             velocities: Some(&m.velocities),
             ..SurfaceRef::new(&m.vertices, &m.triangles)

@@ -152,9 +152,12 @@ pub struct ShellOutputSpec {
     /// Thickness (m) each piece is given in the frames, so renders show shards (default the
     /// shell's thickness; 0 writes the mid-surface).
     pub thickness: Option<f64>,
-    /// Also write the frames as one USD cache, `NAME.usda`, at the end (default false): one
-    /// mesh, as `perifrac export` writes it.
+    /// Also write the frames as one USD cache, `NAME.usda`, at the end (default false), as
+    /// `perifrac export` writes it.
     pub usd: Option<bool>,
+    /// Lay that cache out as one mesh prim per fragment, pivoted at its centroid (default
+    /// false).
+    pub usd_pieces: Option<bool>,
     /// Playback frames per second of the USD cache (default 24).
     pub fps: Option<f64>,
 }
@@ -236,10 +239,6 @@ pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
     (
         "output.checkpoint_every",
         "shell runs write no checkpoints yet",
-    ),
-    (
-        "output.usd_pieces",
-        "a shell run numbers its pieces afresh in every frame; its USD cache is one mesh",
     ),
     (
         "output.smooth_cracks",

@@ -172,8 +172,8 @@ pub struct ShellSetup {
     pub povray: bool,
     /// Thickness (m) given to each piece in the frames (0: the mid-surface).
     pub frame_thickness: f64,
-    /// Whether the run ends by writing its frames as one USD cache.
-    pub usd: bool,
+    /// The USD cache the run ends by writing, in its layout (none without `[output] usd`).
+    pub usd: Option<crate::usd::UsdLayout>,
     /// Playback frames per second of that cache.
     pub fps: f64,
     /// What was found and chosen.
@@ -287,7 +287,8 @@ impl ShellSetup {
             Some(t) => ctx.non_negative("output.thickness", t)?,
             None => thickness,
         };
-        crate::setup::check::check_fps(&ctx, f.output.fps)?;
+        let o = &f.output;
+        crate::setup::check::check_cache(&ctx, o.usd, o.usd_pieces, o.fps)?;
 
         let (vertices, triangles) = surface(&ctx, scene, &f.shell)?;
         let mesh =
@@ -452,7 +453,11 @@ impl ShellSetup {
             steps_per_frame,
             povray: f.output.povray.unwrap_or(true),
             frame_thickness,
-            usd: f.output.usd == Some(true),
+            usd: (f.output.usd == Some(true)).then_some(if f.output.usd_pieces == Some(true) {
+                crate::usd::UsdLayout::Pieces
+            } else {
+                crate::usd::UsdLayout::Mesh
+            }),
             fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
             info,
         })
