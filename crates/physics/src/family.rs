@@ -166,25 +166,24 @@ impl Family {
     /// For each directed bond `i -> j`, the index of the bond `j -> i`.
     pub fn reverse_index(&self) -> Vec<u32> {
         let mut rev = vec![0u32; self.num_bonds()];
-        let mut rows = vec![(); self.len()];
-        crate::par::for_rows_mut(
-            &self.offsets,
-            &mut rows,
-            &mut rev,
-            &|first, block: &mut [()], out: &mut [u32]| {
-                let base = self.offsets[first] as usize;
-                for i in first..first + block.len() {
-                    for k in self.range(i) {
-                        let back = self.range(self.neighbours[k] as usize);
-                        let pos = self.neighbours[back.clone()]
-                            .binary_search(&(i as u32))
-                            .expect("families are symmetric");
-                        out[k - base] = (back.start + pos) as u32;
-                    }
-                }
-            },
-        );
+        self.for_each_reverse(|k, r| rev[k] = r as u32);
         rev
+    }
+
+    /// Calls `f(k, r)` for every directed bond `k` (`i -> j`), in bond order, with the index
+    /// `r` of its reverse (`j -> i`), storing no index. Rows are sorted by neighbour, so
+    /// walking the particles in order meets the entries equal to `i` of each row `j` in that
+    /// row's own order: a cursor per row finds every reverse bond in one pass.
+    pub fn for_each_reverse(&self, mut f: impl FnMut(usize, usize)) {
+        let mut cursor: Vec<u32> = self.offsets[..self.len()].to_vec();
+        for i in 0..self.len() {
+            for k in self.range(i) {
+                let j = self.neighbours[k] as usize;
+                debug_assert_eq!(self.neighbours[cursor[j] as usize] as usize, i);
+                f(k, cursor[j] as usize);
+                cursor[j] += 1;
+            }
+        }
     }
 
     /// Heap bytes used by the bond arrays.

@@ -265,20 +265,17 @@ impl ChenModel {
             let target = (targets.as_slice(), disc.materials());
             let l = fit_tensors(fam, x, disc.volumes(), w, delta, &s, target, FIT_RIDGE);
             // each bond carries its reverse's weight too, so the force loop reads both in
-            // one stream; filled in place (the reverse index is built here only when
-            // nothing keeps it), no other per-bond array is allocated
+            // one stream; filled in place (through the reverse index when one is kept, else
+            // by a walk that stores none), no other per-bond array is allocated
             let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
             dilatation_weights(fam, x, w, delta, &l, &s, FIT_BOUND, &c_theta, &mut pairs);
-            let own_rev;
-            let rev = match &reverse {
-                Some(r) => r,
-                None => {
-                    own_rev = fam.reverse_index();
-                    &own_rev
+            match &reverse {
+                Some(rev) => {
+                    for (k, &r) in rev.iter().enumerate() {
+                        pairs[k][1] = pairs[r as usize][0];
+                    }
                 }
-            };
-            for (k, &r) in rev.iter().enumerate() {
-                pairs[k][1] = pairs[r as usize][0];
+                None => fam.for_each_reverse(|k, r| pairs[k][1] = pairs[r][0]),
             }
             pairs
         });

@@ -25,7 +25,7 @@
 
 use crate::family::Family;
 use crate::math::{sub, Vec3};
-use crate::par::map_particles;
+use crate::par::{for_rows_mut, map_particles};
 
 /// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
 /// `L`.
@@ -228,27 +228,33 @@ pub(crate) fn dilatation_weights(
     out: &mut [[f64; 2]],
 ) {
     let rl = fam.rest_lengths();
-    for i in 0..fam.len() {
-        let range = fam.range(i);
-        let mut worst: f64 = 0.0;
-        for k in range.clone() {
-            let q = mandel(rest_direction(fam, x, i, k));
-            let g = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
-            out[k][0] = g;
-            worst = worst.max((g - 1.0).abs());
+    // Per particle, its own bonds' slots: in parallel, each particle as it was done in turn.
+    let mut rows = vec![(); fam.len()];
+    let offsets = fam.offsets();
+    for_rows_mut(offsets, &mut rows, out, &|first, block: &mut [()], out| {
+        let base = offsets[first] as usize;
+        for i in first..first + block.len() {
+            let range = fam.range(i);
+            let mut worst: f64 = 0.0;
+            for k in range.clone() {
+                let q = mandel(rest_direction(fam, x, i, k));
+                let g = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
+                out[k - base][0] = g;
+                worst = worst.max((g - 1.0).abs());
+            }
+            // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
+            let a = if worst > bound - 1.0 {
+                (bound - 1.0) / worst
+            } else {
+                1.0
+            };
+            let scale = c[i] / own[i];
+            for k in range {
+                let d = omega(w, delta, rl, k) * (1.0 + a * (out[k - base][0] - 1.0));
+                out[k - base][0] = d * scale;
+            }
         }
-        // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
-        let a = if worst > bound - 1.0 {
-            (bound - 1.0) / worst
-        } else {
-            1.0
-        };
-        let scale = c[i] / own[i];
-        for k in range {
-            let d = omega(w, delta, rl, k) * (1.0 + a * (out[k][0] - 1.0));
-            out[k][0] = d * scale;
-        }
-    }
+    });
 }
 
 /// A distribution of correction factors (1: MODEL.md's constant).
