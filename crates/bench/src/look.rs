@@ -136,12 +136,14 @@ fn validity(s: &Surface, pieces: usize) -> (usize, usize, usize) {
 /// Medit mesh beside the scene, with the scene text that pulls its two ends apart along its
 /// axis at 0.1 m/s each, a notch half its depth deep across its middle to start the crack
 /// there, for at most [`SPLIT_LONGEST`] in [`SPLIT_FRAMES`] frames. An unstructured bar's
-/// points come from `seed`.
+/// points come from `seed`; `calibrated` sets Chen's scalar calibration in place of the
+/// default fit.
 fn split_scene(
     dir: &Path,
     angle: f64,
     cells: [usize; 3],
     unstructured: Option<u64>,
+    calibrated: bool,
 ) -> Result<String, BenchError> {
     // Slow ends (0.1 m/s) and a deep notch (half the depth) give one crack across the notch
     // rather than a shattered bar: at 1 m/s and a quarter-depth notch the bar came apart in
@@ -234,13 +236,18 @@ fn split_scene(
     Ok(format!(
         "[mesh]\nfile = \"{}\"\n\n\
          [[material]]\nbulk_modulus = 3.3e10\nshear_modulus = 2.0e10\ndensity = 2200.0\n\
-         s_crit = 0.0005\n\n[simulation]\nduration = {duration}\n\n\
+         s_crit = 0.0005\n\n[simulation]\nduration = {duration}\n{}\n\
          [[anchor]]\nregion = {}\nvelocity = [{}, {}, 0.0]\n\n\
          [[anchor]]\nregion = {}\nvelocity = [{}, {}, 0.0]\n\n\
          [[precrack]]\npoint = [{}, {}, 0.0]\nnormal = [{c}, {s}, 0.0]\n\
          region = {{ min = [{}, {}, -1.0], max = [{}, {}, {}] }}\n\n[output]\n\
          frames = {SPLIT_FRAMES}\n",
         path.display(),
+        if calibrated {
+            "correction = \"calibrated\""
+        } else {
+            ""
+        },
         cap(left),
         -speed * axis[0],
         -speed * axis[1],
@@ -291,20 +298,26 @@ fn step_until_apart(
 }
 
 /// The mode-I split of a bar along the lattice and at 30 degrees to it, and on unstructured
-/// tets from three seeds (one at [`Effort::Tiny`]): crack area over the bar's section, and how
-/// far the crack faces' normals lean from the bar's axis (area-weighted mean and 90th
-/// percentile), with the pieces' validity, when the bar has come apart.
+/// tets from three seeds (one at [`Effort::Tiny`]), then (at [`Effort::Full`]) on the same
+/// unstructured bars with the scalar calibration for comparison (table rows, no panels): crack
+/// area over the bar's section, and how far the crack faces' normals lean from the bar's axis
+/// (area-weighted mean and 90th percentile), with the pieces' validity, when the bar has come
+/// apart.
 pub fn split(
     effort: Effort,
     progress: &mut dyn FnMut(&str),
 ) -> Result<(Table, Facets), BenchError> {
-    let (cells, seeds): ([usize; 3], &[u64]) = match effort {
-        Effort::Tiny => ([12, 2, 2], &[1]),
-        Effort::Full => ([48, 8, 8], &[1, 2, 3]),
+    let (cells, seeds, compare): ([usize; 3], &[u64], bool) = match effort {
+        Effort::Tiny => ([12, 2, 2], &[1], false),
+        Effort::Full => ([48, 8, 8], &[1, 2, 3], true),
     };
     let dir = tempfile_dir()?;
-    let mut cases: Vec<(f64, Option<u64>)> = vec![(0.0, None), (30.0, None)];
-    cases.extend(seeds.iter().map(|&seed| (0.0, Some(seed))));
+    // (degrees to the lattice, unstructured seed, scalar calibration)
+    let mut cases: Vec<(f64, Option<u64>, bool)> = vec![(0.0, None, false), (30.0, None, false)];
+    cases.extend(seeds.iter().map(|&seed| (0.0, Some(seed), false)));
+    if compare {
+        cases.extend(seeds.iter().map(|&seed| (0.0, Some(seed), true)));
+    }
     let mut panels: [Vec<Panel>; 2] = [Vec::new(), Vec::new()];
     let mut t = Table::new(&[
         "bar's mesh",
@@ -318,13 +331,15 @@ pub fn split(
         "pieces not closed 2-manifolds",
         "pieces inside out",
     ]);
-    for (degrees, unstructured) in cases {
-        let mesh = match unstructured {
-            Some(seed) => format!("unstructured tets, seed {seed}"),
-            None => format!("{degrees:.0} degrees to the lattice"),
+    for (degrees, unstructured, calibrated) in cases {
+        let mesh = match (unstructured, calibrated) {
+            (Some(seed), false) => format!("unstructured tets, seed {seed}"),
+            (Some(seed), true) => format!("unstructured tets, seed {seed}, scalar calibration"),
+            (None, _) => format!("{degrees:.0} degrees to the lattice"),
         };
         let case = format!("split, {mesh}");
-        let text = split_scene(dir.path(), degrees.to_radians(), cells, unstructured)?;
+        let angle = degrees.to_radians();
+        let text = split_scene(dir.path(), angle, cells, unstructured, calibrated)?;
         let scene = Scene::parse(&text, &dir.path().join("split.toml"))
             .map_err(|e| scene_error(&case, &e))?;
         let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&case, &e))?;
@@ -347,7 +362,9 @@ pub fn split(
             .into_iter()
             .enumerate()
         {
-            panels[row].push(crack_panel(s, left, axis, format!("{mesh}, {which}")));
+            if !calibrated {
+                panels[row].push(crack_panel(s, left, axis, format!("{mesh}, {which}")));
+            }
             let (area, mean, p90) = roughness(s, left, axis);
             let (count, open, inside_out) = validity(s, pieces.count);
             t.push(vec![
