@@ -264,10 +264,10 @@ fn split_scene(
     ))
 }
 
-/// The longest a split runs (s). The crack starts about 0.45 ms in; the last ligament breaks
-/// 0.7 to 1.7 ms later on the meshes measured (48 x 8 x 8 cells, either correction), so a run
-/// that stopped at 1.5 ms left some bars in one piece and counted their crack's two faces
-/// (2.2 to 2.4 times the section) as one piece's roughness.
+/// The longest a split runs (s). The crack starts about 0.45 ms in; the bars measured (48 x 8
+/// x 8 cells, either correction) came apart between 1.2 and 4.2 ms, the last ligament holding
+/// longest, so a run that stopped at 1.5 ms left some in one piece and counted their crack's
+/// two faces (2.2 to 2.4 times the section) as one piece's roughness.
 const SPLIT_LONGEST: f64 = 0.0045;
 
 /// Frames of a split; after each the run stops if the bar is in two.
