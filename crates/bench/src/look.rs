@@ -38,7 +38,11 @@ fn step_to_end(
     progress: &mut dyn FnMut(&str),
 ) -> Result<(), BenchError> {
     progress(&format!("look: {case}"));
-    let steps = setup.frames as u64 * setup.steps_per_frame;
+    step(case, setup, setup.frames as u64 * setup.steps_per_frame)
+}
+
+/// Takes `steps` steps of `setup`; a failed step is an error of `case`.
+fn step(case: &str, setup: &mut Setup, steps: u64) -> Result<(), BenchError> {
     for _ in 0..steps {
         setup.driver.step().map_err(|cause| BenchError::Physics {
             case: case.into(),
@@ -283,12 +287,7 @@ fn step_until_apart(
 ) -> Result<Option<f64>, BenchError> {
     progress(&format!("look: {case}"));
     for _ in 0..setup.frames {
-        for _ in 0..setup.steps_per_frame {
-            setup.driver.step().map_err(|cause| BenchError::Physics {
-                case: case.into(),
-                cause,
-            })?;
-        }
+        step(case, setup, setup.steps_per_frame)?;
         let pieces = setup.driver.mesh().pieces();
         if pieces.piece_of_tet[ends[0]] != pieces.piece_of_tet[ends[1]] {
             return Ok(Some(setup.driver.solver().time()));

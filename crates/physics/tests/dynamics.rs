@@ -5,8 +5,8 @@ mod support;
 use perifrac_physics::energy::angular_momentum;
 use perifrac_physics::math::{cross, norm, sub, Vec3};
 use perifrac_physics::{
-    lanczos_frequency, max_frequency, stable_frequency, ChenModel, ChenOptions, Discretization,
-    Explicit, ExplicitConfig, ForceModel, Loads, PhysicsError, TimeStep,
+    lanczos_frequency, max_frequency, stable_frequency, ChenModel, Discretization, Explicit,
+    ExplicitConfig, ForceModel, Loads, PhysicsError, TimeStep,
 };
 use perifrac_topology::mesher::unstructured_box_data;
 use perifrac_topology::TetMesh;
@@ -105,11 +105,7 @@ fn unstructured_block() -> ChenModel {
         1.45 * mesh.mean_edge_length(),
     )
     .unwrap();
-    let options = ChenOptions {
-        fitted_dilatation: false,
-        ..ChenOptions::default()
-    };
-    ChenModel::with_options(disc, &[support::steel()], options).unwrap()
+    ChenModel::with_options(disc, &[support::steel()], support::SCALAR).unwrap()
 }
 
 #[test]

@@ -17,13 +17,6 @@ fn fitted() -> ChenOptions {
     }
 }
 
-fn scalar() -> ChenOptions {
-    ChenOptions {
-        fitted_dilatation: false,
-        ..ChenOptions::default()
-    }
-}
-
 /// The largest `|theta_i - tr(eps)|` over all particles of a block under the homogeneous
 /// strain `eps` (symmetric, small), over `|eps|`.
 fn dilatation_error(m: &mut ChenModel, eps: [[f64; 3]; 3]) -> f64 {
@@ -52,7 +45,7 @@ fn fitted_dilatation_reads_every_homogeneous_strain_on_every_particle() {
     for (cells, k) in [([4, 3, 2], 1.5), ([6, 6, 6], 1.0), ([3, 3, 3], 2.0)] {
         let (disc, _, _) = block([0.04, 0.03, 0.02], cells, k);
         let mut fit = ChenModel::with_options(disc.clone(), &[steel()], fitted()).unwrap();
-        let mut scalar = ChenModel::with_options(disc, &[steel()], scalar()).unwrap();
+        let mut scalar = ChenModel::with_options(disc, &[steel()], support::SCALAR).unwrap();
         for (name, eps) in [("shear", shear), ("pull", pull), ("twist", twist)] {
             let (a, b) = (
                 dilatation_error(&mut fit, eps),

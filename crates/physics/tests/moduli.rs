@@ -6,7 +6,7 @@ mod support;
 use perifrac_physics::{
     ChenMaterial, ChenModel, ChenOptions, Explicit, ExplicitConfig, Loads, TimeStep,
 };
-use support::block;
+use support::{block, SCALAR};
 
 /// Young's modulus (Pa) and density (kg/m^3) of the bars: steel-like.
 const YOUNG: f64 = 200e9;
@@ -40,13 +40,6 @@ fn tension(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> (f64, f64) 
 const MODEL_MD: ChenOptions = ChenOptions {
     energy_consistent: true,
     calibrated: false,
-    fitted_dilatation: false,
-};
-
-/// The scalar calibration alone (`correction = "calibrated"`, the default before issue 18).
-const SCALAR: ChenOptions = ChenOptions {
-    energy_consistent: true,
-    calibrated: true,
     fitted_dilatation: false,
 };
 

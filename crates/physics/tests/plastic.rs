@@ -254,10 +254,7 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
     if let Some(p) = &mut same_limit.plasticity {
         p.from_strain = false;
     }
-    let scalar = ChenOptions {
-        fitted_dilatation: false,
-        ..ChenOptions::default()
-    };
+    let scalar = support::SCALAR;
     for (name, material, opts) in [
         ("one limit for all", &same_limit, fitted),
         ("scalar calibration", &mat, scalar),

@@ -59,6 +59,17 @@ pub enum UsdLayout {
     Pieces,
 }
 
+impl UsdLayout {
+    /// The layout the `[output]` keys `usd` and `usd_pieces` ask for (none without `usd`).
+    pub(crate) fn from_keys(usd: Option<bool>, pieces: Option<bool>) -> Option<UsdLayout> {
+        (usd == Some(true)).then_some(if pieces == Some(true) {
+            UsdLayout::Pieces
+        } else {
+            UsdLayout::Mesh
+        })
+    }
+}
+
 /// What [`export_usd`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct UsdReport {
@@ -119,7 +130,6 @@ pub fn export_usd(
     if manifest.frames.is_empty() {
         return Err(err("run.json lists no frames yet".into()));
     }
-
     let fps = fps.or(manifest.fps).unwrap_or(DEFAULT_FPS);
     if !(fps.is_finite() && fps > 0.0) {
         return Err(err(format!(

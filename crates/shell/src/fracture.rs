@@ -264,6 +264,19 @@ impl ShellModel {
         self.fracture.as_ref().map_or(&[], |f| &f.split_from)
     }
 
+    /// The triangle that triangle `t` was part of when the mesh had `count` triangles (`t`
+    /// itself when `t < count`), following [`ShellModel::split_from`] down.
+    pub fn part_of(&self, t: usize, count: usize) -> usize {
+        let from = self.split_from();
+        let mut t = t;
+        while t >= count {
+            // splits append, so every split-off triangle's origin is a lower index
+            debug_assert!((from[t] as usize) < t);
+            t = from[t] as usize;
+        }
+        t
+    }
+
     /// Each triangle's largest principal elastic strain on either face of the shell over its
     /// threshold (tensile or compressive): above 1 it breaks; with the principal direction in
     /// its rest frame. Empty for a shell that does not break.

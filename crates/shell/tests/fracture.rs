@@ -141,6 +141,25 @@ fn a_notched_sheet_pulled_apart_breaks_across_the_load_into_valid_pieces() {
     // triangles (each within 45 deg of it), but their principal axis is the line: measured
     // 3.6 deg off y; 10 deg allows a zigzag of a cell either way over the 5 cm.
     assert!(tilt < 10.0, "{tilt}");
+    // Splits append: every triangle split off records a lower one, and following the record
+    // down ends at a triangle the sheet started with.
+    let n0 = notched_sheet(0.25, 0.05, 2e4)
+        .model()
+        .mesh()
+        .triangles()
+        .len();
+    let from = m.split_from();
+    assert_eq!(from.len(), m.mesh().triangles().len());
+    assert!(from.len() > n0, "the sheet split no triangle");
+    for (t, &f) in from.iter().enumerate() {
+        assert!(if t < n0 {
+            f as usize == t
+        } else {
+            (f as usize) < t
+        });
+        let root = m.part_of(t, n0);
+        assert!(root < n0 && (t >= n0 || root == t));
+    }
 }
 
 #[test]

@@ -29,16 +29,20 @@ pub fn steel() -> ChenMaterial {
     ChenMaterial::from_young_poisson(200e9, 0.25, 7800.0).expect("valid")
 }
 
-/// An elastic Chen model on a block, with the scalar calibration (the fitted dilatation off):
-/// the model the tests that use it measured their figures on.
+/// The scalar calibration alone (`correction = "calibrated"`, the default before issue 18):
+/// the fitted dilatation off.
+pub const SCALAR: ChenOptions = ChenOptions {
+    energy_consistent: true,
+    calibrated: true,
+    fitted_dilatation: false,
+};
+
+/// An elastic Chen model on a block, with the scalar calibration ([`SCALAR`]): the model the
+/// tests that use it measured their figures on.
 pub fn scalar_block(cells: [usize; 3], k: f64) -> ChenModel {
     let size = cells.map(|c| c as f64 * 0.01);
     let (disc, _, _) = block(size, cells, k);
-    let options = ChenOptions {
-        fitted_dilatation: false,
-        ..ChenOptions::default()
-    };
-    ChenModel::with_options(disc, &[steel()], options).expect("model")
+    ChenModel::with_options(disc, &[steel()], SCALAR).expect("model")
 }
 
 /// An elastic Chen model on a block.

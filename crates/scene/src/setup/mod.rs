@@ -471,11 +471,7 @@ fn output_options(f: &SceneFile) -> OutputOptions {
             Some(0) => CheckpointPolicy::OnInterrupt,
             Some(n) => CheckpointPolicy::EveryFrames(n),
         },
-        usd: (f.output.usd == Some(true)).then_some(if f.output.usd_pieces == Some(true) {
-            crate::usd::UsdLayout::Pieces
-        } else {
-            crate::usd::UsdLayout::Mesh
-        }),
+        usd: crate::usd::UsdLayout::from_keys(f.output.usd, f.output.usd_pieces),
         fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
         smooth_cracks: f
             .output

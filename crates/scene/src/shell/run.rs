@@ -407,23 +407,11 @@ impl ShellWriter {
         let thickness = (setup.frame_thickness > 0.0).then_some(setup.frame_thickness);
         let m = model.frame(x, shell.velocities(), thickness);
         // Stable ids: a triangle split off since the last frame takes the fragment of the
-        // triangle it was part of then (splits append, so following `split_from` down to an
-        // index under the last frame's count finds it).
+        // triangle it was part of then.
         let mesh_pieces = pieces(model.mesh());
         let count = mesh_pieces.iter().max().map_or(0, |p| *p as usize + 1);
-        let (from, before) = (model.split_from(), self.triangles_before);
-        let earlier = |t: usize| {
-            let mut t = t;
-            while t >= before {
-                match from.get(t) {
-                    Some(&f) if (f as usize) < t => t = f as usize,
-                    // not reached: a triangle past the last frame's count was split off
-                    // a lower one
-                    _ => return 0,
-                }
-            }
-            t
-        };
+        let before = self.triangles_before;
+        let earlier = |t: usize| model.part_of(t, before);
         let ids = self.ids.update_split(&mesh_pieces, count, index, &earlier);
         self.triangles_before = mesh_pieces.len();
         self.manifest.fragments = self.ids.births().to_vec();

@@ -453,11 +453,7 @@ impl ShellSetup {
             steps_per_frame,
             povray: f.output.povray.unwrap_or(true),
             frame_thickness,
-            usd: (f.output.usd == Some(true)).then_some(if f.output.usd_pieces == Some(true) {
-                crate::usd::UsdLayout::Pieces
-            } else {
-                crate::usd::UsdLayout::Mesh
-            }),
+            usd: crate::usd::UsdLayout::from_keys(f.output.usd, f.output.usd_pieces),
             fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
             info,
         })
