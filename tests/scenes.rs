@@ -65,7 +65,13 @@ fn every_scene_names_its_figure_loads_and_sets_up() {
             let scene = ShellScene::parse(&text, &path).unwrap_or_else(|e| panic!("{e}"));
             let setup = ShellSetup::new(&scene, Some(1), false).unwrap_or_else(|e| panic!("{e}"));
             assert!(setup.info.triangles >= 480, "{}", path.display());
-            assert!(setup.info.dt > 0.0 && setup.info.dt <= setup.info.dt_limit);
+            // Explicit steps keep under the stable limit; Newmark's may pass it.
+            assert!(setup.info.dt > 0.0, "{}", path.display());
+            assert!(
+                setup.info.newmark.is_some() || setup.info.dt <= setup.info.dt_limit,
+                "{}",
+                path.display()
+            );
             continue;
         }
         let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));

@@ -304,10 +304,11 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
         info.mass,
         info.dt,
         info.dt_limit,
-        if info.event_levels > 0 {
-            format!("event search to level {}", info.event_levels)
-        } else {
-            "no event search".to_string()
+        match (info.event_levels, info.newmark.is_some()) {
+            (0, false) => "explicit, no event search".to_string(),
+            (0, true) => "implicit Newmark, no event search".to_string(),
+            (k, false) => format!("explicit, event search to level {k}"),
+            (k, true) => format!("implicit Newmark, event search to level {k}"),
         },
         setup.frames,
         setup.steps_per_frame,
@@ -348,6 +349,17 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
              step",
             s.substeps,
             s.substeps as f64 / s.steps.max(1) as f64,
+        );
+    }
+    if let Some(nm) = s.newmark {
+        eprintln!(
+            "Newmark: {} solves, {:.1} L-BFGS iterations each, {} at the cap, {} \
+             factorisations ({:.2} s)",
+            nm.steps,
+            nm.iterations as f64 / nm.steps.max(1) as f64,
+            nm.capped,
+            nm.factorizations,
+            nm.factor_seconds
         );
     }
     let stepping = s.physics_time.as_secs_f64().max(1e-9);

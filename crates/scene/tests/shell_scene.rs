@@ -236,3 +236,79 @@ fn punctured_sheets_do_not_run_away_at_their_cracks() {
         eprintln!("{file}: kinetic energy {} J", summary.kinetic_energy);
     }
 }
+
+#[test]
+fn a_newmark_egg_runs_at_steps_past_the_explicit_limit_and_records_its_solves() {
+    // The paper's integrator: the egg at 4 times its explicit limit (1.33e-6 s), with the
+    // search over it, cracks and writes what the solves did.
+    let text = EGG.replace(
+        "event_search = true",
+        "event_search = true\nintegrator = \"newmark\"\ndt = 5e-6\nevent_levels = 6",
+    );
+    let setup = ShellSetup::new(&parse(&text).unwrap(), None, false).unwrap();
+    assert!(setup.info.newmark.is_some());
+    assert!(
+        setup.info.dt > 3.0 * setup.info.dt_limit,
+        "{:?}",
+        setup.info
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let summary = run_shell(setup, dir.path(), &mut Silent).unwrap();
+    assert!(summary.broken_triangles > 0, "{summary:?}");
+    let nm = summary.newmark.expect("Newmark statistics");
+    assert_eq!(nm.steps, summary.substeps + summary.rejected);
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("run.json")).unwrap())
+            .unwrap();
+    assert_eq!(run["integrator"], "newmark");
+    assert_eq!(
+        run["frames"][2]["newmark"]["solves"].as_u64(),
+        Some(nm.steps)
+    );
+}
+
+#[test]
+fn newmark_keys_are_checked_by_key() {
+    for (extra, key, says) in [
+        (
+            "integrator = \"verlet\"",
+            "simulation.integrator",
+            "newmark",
+        ),
+        (
+            "integrator = \"newmark\"",
+            "simulation.dt",
+            "give dt in seconds",
+        ),
+        (
+            "integrator = \"newmark\"\ndt = 1e-6\ntolerance = 2.0",
+            "simulation.tolerance",
+            "(0, 1)",
+        ),
+        (
+            "integrator = \"newmark\"\ndt = 1e-6\niterations = 0",
+            "simulation.iterations",
+            "at least 1",
+        ),
+        (
+            "iterations = 10",
+            "simulation.iterations",
+            "integrator = \"newmark\"",
+        ),
+        (
+            "tolerance = 1e-5",
+            "simulation.tolerance",
+            "integrator = \"newmark\"",
+        ),
+    ] {
+        let text = EGG.replace(
+            "event_search = true",
+            &format!("event_search = true\n{extra}"),
+        );
+        let e = setup_error(&text);
+        assert!(
+            e.contains("egg.toml") && e.contains(key) && e.contains(says),
+            "{extra}: {e}"
+        );
+    }
+}

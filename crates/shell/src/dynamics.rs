@@ -1,5 +1,9 @@
-//! Explicit time stepping of a shell (Newmark with `beta = 0`, `gamma = 1/2`: velocity
-//! Verlet) and the estimate of its stable step.
+//! Time stepping of a shell: explicit (Newmark with `beta = 0`, `gamma = 1/2`: velocity
+//! Verlet) by default, with the estimate of its stable step, or implicit Newmark
+//! ([`newmark`], the paper's production integrator) when set.
+
+mod newmark;
+pub use newmark::{NewmarkConfig, NewmarkStats};
 
 use perifrac_checkpoint::{Reader, Writer};
 use perifrac_contact::{Colliders, ContactStats};
@@ -9,7 +13,7 @@ use crate::fracture::FractureReport;
 use crate::model::ShellModel;
 use crate::self_contact::{SelfContact, SelfContactStats, ShellSelfContact};
 use perifrac_physics::lanczos_frequency_of;
-use perifrac_physics::math::{axpy, dot, norm, scale, sub, Vec3};
+use perifrac_physics::math::{add, axpy, dot, norm, scale, sub, Vec3};
 use perifrac_physics::stable_step::{LANCZOS_ITERATIONS, LANCZOS_TOLERANCE};
 
 /// What a trial step can change, kept to undo it: buffers reused from trial to trial.
@@ -23,12 +27,15 @@ pub(crate) struct Snapshot {
     elastic: f64,
     self_energy: f64,
     time: f64,
+    /// The implicit step's accelerations (empty when explicit).
+    acc: Vec<Vec3>,
     /// The colliders' moving state (balls).
     colliders: Writer,
 }
 
 /// A shell moving under its elastic forces, gravity, pinned vertices, colliders and (when set)
-/// its own pieces' repulsion, stepped explicitly.
+/// its own pieces' repulsion, stepped explicitly, or by implicit Newmark when
+/// [`ExplicitShell::set_newmark`] says so.
 #[derive(Debug, Clone)]
 pub struct ExplicitShell {
     model: ShellModel,
@@ -52,6 +59,10 @@ pub struct ExplicitShell {
     self_contact: Option<SelfContact>,
     /// Its penalty energy at the current positions (J).
     self_energy: f64,
+    /// The implicit Newmark solver, when set.
+    newmark: Option<Box<newmark::Newmark>>,
+    /// Counts changes of the mesh and of the held set (the implicit step's matrix follows it).
+    topology: u64,
 }
 
 impl ExplicitShell {
@@ -78,6 +89,8 @@ impl ExplicitShell {
             depths: Vec::new(),
             self_contact: None,
             self_energy: 0.0,
+            newmark: None,
+            topology: 0,
         })
     }
 
@@ -100,6 +113,10 @@ impl ExplicitShell {
         s.elastic = self.elastic;
         s.self_energy = self.self_energy;
         s.time = self.time;
+        match &self.newmark {
+            Some(nm) => s.acc.clone_from(&nm.acc),
+            None => s.acc.clear(),
+        }
         s.colliders.clear();
         if let Some(c) = &self.colliders {
             c.save(&mut s.colliders);
@@ -115,6 +132,9 @@ impl ExplicitShell {
         self.elastic = s.elastic;
         self.self_energy = s.self_energy;
         self.time = s.time;
+        if let Some(nm) = &mut self.newmark {
+            nm.acc.clone_from(&s.acc);
+        }
         if let Some(c) = &mut self.colliders {
             // Saved from these very colliders a moment ago: it reads back.
             let _ = c.restore(&mut Reader::new(s.colliders.bytes()));
@@ -280,6 +300,9 @@ impl ExplicitShell {
     /// Moves vertex `i` at the constant `velocity` (m/s) from now on, whatever pulls on it.
     pub fn drive(&mut self, i: usize, velocity: Vec3) {
         if let Some(p) = self.pinned.get_mut(i) {
+            if !*p {
+                self.topology += 1;
+            }
             *p = true;
             self.v[i] = velocity;
         }
@@ -315,8 +338,41 @@ impl ExplicitShell {
             .sum()
     }
 
-    /// One step of `dt` (s): half kick, drift, forces (elastic, colliders, self-contact), half
-    /// kick.
+    /// Steps implicitly by Newmark with `config` from now on, or explicitly again with `None`.
+    pub fn set_newmark(&mut self, config: Option<NewmarkConfig>) -> Result<(), ShellError> {
+        self.newmark = match config {
+            Some(c) => Some(Box::new(newmark::Newmark::new(c)?)),
+            None => None,
+        };
+        Ok(())
+    }
+
+    /// The implicit step's settings, when it is on.
+    pub fn newmark(&self) -> Option<NewmarkConfig> {
+        self.newmark.as_ref().map(|nm| nm.config())
+    }
+
+    /// Caps the implicit solves of the next steps at `cap` iterations (below the settings' own
+    /// cap), or lifts that with `None`; nothing for an explicit shell. The event search caps
+    /// its trials so.
+    pub fn set_solve_cap(&mut self, cap: Option<usize>) {
+        if let Some(nm) = &mut self.newmark {
+            nm.trial_cap = cap;
+        }
+    }
+
+    /// Whether the last step was implicit and its solve stopped at the iteration cap.
+    pub fn last_solve_capped(&self) -> bool {
+        self.newmark.as_ref().is_some_and(|nm| nm.last_capped)
+    }
+
+    /// What the implicit steps did so far (zeros when explicit).
+    pub fn newmark_stats(&self) -> NewmarkStats {
+        self.newmark.as_ref().map(|nm| nm.stats).unwrap_or_default()
+    }
+
+    /// One step of `dt` (s). Explicit: half kick, drift, forces (elastic, colliders,
+    /// self-contact), half kick. Implicit: see [`NewmarkConfig`].
     pub fn step(&mut self, dt: f64) -> Result<(), ShellError> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(ShellError::BadSetting {
@@ -324,6 +380,9 @@ impl ExplicitShell {
                 expected: "finite and > 0",
                 value: dt,
             });
+        }
+        if self.newmark.is_some() {
+            return self.newmark_step(dt);
         }
         self.kick(0.5 * dt);
         for (x, v) in self.x.iter_mut().zip(&self.v) {
@@ -389,9 +448,18 @@ impl ExplicitShell {
         if !report.changed {
             return Ok(report);
         }
+        self.topology += 1;
         for src in &report.added {
             let pinned = self.pinned[src[0] as usize] && self.pinned[src[1] as usize];
             self.pinned.push(pinned);
+            // An implicit shell's new vertex starts with its sources' mean acceleration (a
+            // point on an edge between them).
+            if let Some(nm) = &mut self.newmark {
+                let (a, b) = (src[0] as usize, src[1] as usize);
+                if let (Some(&aa), Some(&ab)) = (nm.acc.get(a), nm.acc.get(b)) {
+                    nm.acc.push(scale(add(aa, ab), 0.5));
+                }
+            }
             if let Some(&r) = self.radii.first() {
                 self.radii.push(r);
             }

@@ -112,6 +112,10 @@ pub enum ShellError {
         /// Simulated time (s).
         time: f64,
     },
+    /// The implicit step's matrix could not be factored (it is singular: a free vertex with
+    /// no mass, say).
+    #[error("the implicit shell step's matrix: {0}")]
+    Factorization(String),
     /// Arrays that must match the vertex count do not.
     #[error("{what}: expected {expected} entries, got {got}")]
     LengthMismatch {
@@ -122,4 +126,17 @@ pub enum ShellError {
         /// Given length.
         got: usize,
     },
+}
+
+/// [`ShellError::BadSetting`] as an `Err`, for the settings' checks.
+pub(crate) fn bad_setting<T>(
+    what: &'static str,
+    expected: &'static str,
+    value: f64,
+) -> Result<T, ShellError> {
+    Err(ShellError::BadSetting {
+        what,
+        expected,
+        value,
+    })
 }

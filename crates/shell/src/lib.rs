@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+mod block_matrix;
 mod broad_phase;
 pub mod dynamics;
 pub mod error;
@@ -34,7 +35,7 @@ pub mod proximity;
 pub mod search;
 pub mod self_contact;
 
-pub use dynamics::{max_frequency, ExplicitShell};
+pub use dynamics::{max_frequency, ExplicitShell, NewmarkConfig, NewmarkStats};
 pub use error::ShellError;
 pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;

@@ -687,6 +687,97 @@ impl ShellModel {
         Ok(self.face_work.iter().map(|w| w.energy).sum())
     }
 
+    /// A positive semi-definite stand-in for the energy's Hessian at `x` (m), for an implicit
+    /// step's preconditioner: each 3x3 block `B` (N/m) of vertex pair `(i, j)`, the derivative
+    /// of the force on `i` by `-x_j`, is handed to `add(i, j, B)` (both orders of a pair, and
+    /// `i == j`, each once per term; a pair may come many times: sum them).
+    ///
+    /// Membrane: the Gauss-Newton term `J^T Q J` per triangle, `J` the squared edge lengths'
+    /// Jacobian and `Q` the energy's 3x3 matrix in them (exact; only `s`'s own curvature, which
+    /// carries the stress, is left out). Bending: per interior edge of a triangle, `w_k phi'^2
+    /// grad(theta) grad(theta)^T` with `w_k` the absolute row sum of the triangle's bending
+    /// matrix over its interior edges, which majorises the Gauss-Newton term.
+    pub(crate) fn gauss_newton(
+        &mut self,
+        x: &[Vec3],
+        mut add: impl FnMut(u32, u32, [[f64; 3]; 3]),
+    ) -> Result<(), ShellError> {
+        self.check_len("shell positions", x.len())?;
+        self.edge_pass(x);
+        let nu = self.material.poisson;
+        let (cm, cb) = (
+            self.material.membrane_factor(),
+            self.material.bending_factor(),
+        );
+        let (mesh, ew) = (&self.mesh, &self.edge_work);
+        let hess = |q: &[f64; 6], t: &[f64; 3], c: f64| {
+            let s = |a: usize, b: usize| {
+                const IDX: [[usize; 3]; 3] = [[0, 3, 4], [3, 1, 5], [4, 5, 2]];
+                2.0 * c * ((1.0 - nu) * q[IDX[a][b]] + nu * t[a] * t[b])
+            };
+            [
+                [s(0, 0), s(0, 1), s(0, 2)],
+                [s(1, 0), s(1, 1), s(1, 2)],
+                [s(2, 0), s(2, 1), s(2, 2)],
+            ]
+        };
+        for (f, (t, fe)) in mesh.triangles().iter().zip(mesh.face_edges()).enumerate() {
+            let r = &self.faces[f];
+            // Membrane: the gradient of s_k is -2 d_k at t[k + 1] and +2 d_k at t[k + 2].
+            let qm = hess(&r.mm, &r.tm, r.area * cm);
+            let d = [0, 1, 2].map(|k| sub(x[t[(k + 2) % 3] as usize], x[t[(k + 1) % 3] as usize]));
+            let jac = |k: usize, v: usize| -> Vec3 {
+                if v == (k + 1) % 3 {
+                    scale(d[k], -2.0)
+                } else if v == (k + 2) % 3 {
+                    scale(d[k], 2.0)
+                } else {
+                    [0.0; 3]
+                }
+            };
+            for a in 0..3 {
+                for b in 0..3 {
+                    let mut block = [[0.0; 3]; 3];
+                    for (k, qk) in qm.iter().enumerate() {
+                        let ja = jac(k, a);
+                        for (l, &q) in qk.iter().enumerate() {
+                            let jb = jac(l, b);
+                            for (row, ra) in block.iter_mut().enumerate() {
+                                for (col, c) in ra.iter_mut().enumerate() {
+                                    *c += q * ja[row] * jb[col];
+                                }
+                            }
+                        }
+                    }
+                    add(t[a], t[b], block);
+                }
+            }
+            // Bending, majorised per interior edge.
+            let qb = hess(&r.mb, &r.tb, r.area * cb);
+            let interior = fe.map(|k| !mesh.edges()[k as usize].is_boundary());
+            for (k, &e) in fe.iter().enumerate() {
+                if !interior[k] {
+                    continue;
+                }
+                let w: f64 = (0..3)
+                    .filter(|&l| interior[l])
+                    .map(|l| qb[k][l].abs())
+                    .sum();
+                let edge = mesh.edges()[e as usize];
+                let work = &ew[e as usize];
+                let c = w * work.slope * work.slope;
+                let ids = [edge.v[0], edge.v[1], edge.opposite[0], edge.opposite[1]];
+                for (a, ga) in ids.iter().zip(&work.grad) {
+                    for (b, gb) in ids.iter().zip(&work.grad) {
+                        let block = [0, 1, 2].map(|row| [0, 1, 2].map(|col| c * ga[row] * gb[col]));
+                        add(*a, *b, block);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The elastic energy (J) at positions `x` (m).
     pub fn energy(&mut self, x: &[Vec3]) -> Result<f64, ShellError> {
         self.check_len("shell positions", x.len())?;

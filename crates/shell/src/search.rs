@@ -2,13 +2,13 @@
 //! sub-steps of `dt 2^-k`; a trial sub-step is discarded whole (positions, velocities, forces,
 //! plastic state) and retried at `k + 1` when the largest force grew by more than a factor or
 //! a triangle would break in it (past its threshold by more than `overshoot`), or when it ran
-//! away (a non-finite energy). At
+//! away (a non-finite energy) or its implicit solve needed more than `trial_iterations`. At
 //! `k = levels` a sub-step is always taken. After a sub-step is taken the plastic state is
 //! updated (inside its force pass), over-strained triangles break, and `k` falls by one; `k`
 //! carries over from step to step, so steps stay fine while forces keep jumping.
 
 use crate::dynamics::{ExplicitShell, Snapshot};
-use crate::error::ShellError;
+use crate::error::{bad_setting, ShellError};
 use crate::fracture::FractureEvent;
 
 /// The search's settings.
@@ -22,6 +22,10 @@ pub struct ShellSearch {
     /// ... or when a triangle in it passes its fracture threshold by more than this share
     /// (>= 0; 0, the paper's: every fracture is found at the finest level).
     pub overshoot: f64,
+    /// Implicit steps: a trial whose solve needs more L-BFGS iterations than this is undone
+    /// and halved (>= 1; the sub-step at the finest level is solved to the settings' own
+    /// cap).
+    pub trial_iterations: usize,
     /// Forces under this share of the largest seen so far cannot reject a trial for growing
     /// (in [0, 1)); growth is also judged from no less than the model's force scale
     /// ([`crate::ShellModel::force_scale`]).
@@ -34,6 +38,7 @@ impl Default for ShellSearch {
             levels: 10,
             force_growth: 1.1,
             overshoot: 0.0,
+            trial_iterations: 30,
             force_floor: 1e-3,
         }
     }
@@ -42,24 +47,20 @@ impl Default for ShellSearch {
 impl ShellSearch {
     /// Refuses settings out of range.
     pub fn check(&self) -> Result<(), ShellError> {
-        let bad = |what, expected, value| {
-            Err(ShellError::BadSetting {
-                what,
-                expected,
-                value,
-            })
-        };
         if self.levels > 20 {
-            return bad("shell search levels", "at most 20", self.levels as f64);
+            return bad_setting("shell search levels", "at most 20", self.levels as f64);
         }
         if self.force_growth.is_nan() || self.force_growth <= 1.0 {
-            return bad("shell search force growth", "above 1", self.force_growth);
+            return bad_setting("shell search force growth", "above 1", self.force_growth);
         }
         if self.overshoot.is_nan() || self.overshoot < 0.0 {
-            return bad("shell search overshoot", ">= 0", self.overshoot);
+            return bad_setting("shell search overshoot", ">= 0", self.overshoot);
+        }
+        if self.trial_iterations == 0 {
+            return bad_setting("shell search trial iterations", "at least 1", 0.0);
         }
         if !(0.0..1.0).contains(&self.force_floor) {
-            return bad("shell search force floor", "in [0, 1)", self.force_floor);
+            return bad_setting("shell search force floor", "in [0, 1)", self.force_floor);
         }
         Ok(())
     }
@@ -76,6 +77,8 @@ pub struct SearchStats {
     pub rejected_force: u64,
     /// Of those, for a triangle that would break.
     pub rejected_fracture: u64,
+    /// Of those, for an implicit solve that reached its iteration cap.
+    pub rejected_solve: u64,
     /// Triangles broken.
     pub events: Vec<FractureEvent>,
 }
@@ -148,6 +151,8 @@ impl SearchedShell {
             if trial {
                 self.shell.save(&mut self.snapshot);
             }
+            self.shell
+                .set_solve_cap(trial.then_some(self.config.trial_iterations));
             let stepped = self.shell.step(dt * units as f64 / full as f64);
             // A trial that ran away is discarded like one whose force grew; at the finest
             // level the error stands.
@@ -158,7 +163,10 @@ impl SearchedShell {
             let after = self.shell.largest_force();
             // Growth is judged from at least the force scale: round-off in free fall is not
             // a force, and the first contact is judged against the scale, not against nothing.
+            // An implicit trial whose solve hit the trials' cap is no state to judge: shorter.
+            let unsolved = trial && self.shell.last_solve_capped();
             let grew = ran_away
+                || unsolved
                 || (after > self.config.force_growth * before.max(scale)
                     && after > self.config.force_floor * self.peak);
             let cracks = trial
@@ -169,7 +177,9 @@ impl SearchedShell {
                 self.shell.restore(&self.snapshot);
                 self.k += 1;
                 self.stats.rejected += 1;
-                if grew {
+                if unsolved {
+                    self.stats.rejected_solve += 1;
+                } else if grew {
                     self.stats.rejected_force += 1;
                 } else {
                     self.stats.rejected_fracture += 1;
@@ -187,6 +197,7 @@ impl SearchedShell {
             self.stats.substeps += 1;
             self.k = self.k.saturating_sub(1);
         }
+        self.shell.set_solve_cap(None);
         Ok(())
     }
 }

@@ -57,6 +57,8 @@ pub struct ShellManifest {
     pub dt_limit: f64,
     /// The event search's finest level (0: none).
     pub event_levels: u32,
+    /// `"explicit"` or `"newmark"`.
+    pub integrator: String,
     /// Total mass (kg).
     pub mass: f64,
     /// Frames written so far.
@@ -109,6 +111,22 @@ pub struct ShellFrameJson {
     /// Runs with the event search: sub-steps so far.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub search: Option<SearchJson>,
+    /// Runs stepped by Newmark: what the implicit solves did so far.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub newmark: Option<NewmarkJson>,
+}
+
+/// The implicit Newmark solves of a shell run so far, in `run.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct NewmarkJson {
+    /// Solves (discarded trials of the search included).
+    pub solves: u64,
+    /// L-BFGS iterations over all solves.
+    pub iterations: u64,
+    /// Solves that stopped at the iteration cap.
+    pub capped: u64,
+    /// Factorisations of the step matrix.
+    pub factorizations: u64,
 }
 
 /// The end of a shell run.
@@ -149,6 +167,8 @@ pub struct ShellSummary {
     pub self_contact: Option<(f64, u64)>,
     /// Wall time (s) in the contact pass with grounds and balls, discarded trials included.
     pub collider_seconds: f64,
+    /// What the implicit Newmark solves did (`None`: explicit steps).
+    pub newmark: Option<perifrac_shell::NewmarkStats>,
     /// The USD cache written at the end (`[output] usd`) and the wall time it took.
     pub usd: Option<(crate::usd::UsdReport, Duration)>,
 }
@@ -254,6 +274,7 @@ pub fn run_shell(
             (st.total_seconds, st.builds)
         }),
         collider_seconds: s.collider_seconds(),
+        newmark: setup.info.newmark.map(|_| s.newmark_stats()),
         usd,
     })
 }
@@ -271,7 +292,8 @@ fn evaluations(setup: &ShellSetup) -> u64 {
 /// part that was stable before a split can run away after it).
 fn advance(setup: &mut ShellSetup, substeps: &mut u64) -> Result<(), perifrac_shell::ShellError> {
     let dt = setup.info.dt;
-    if setup.info.event_levels > 0 {
+    // The search covers the step itself; a Newmark step has no stable limit to keep under.
+    if setup.info.event_levels > 0 || setup.info.newmark.is_some() {
         return setup.shell.advance(dt);
     }
     let mut done = 0.0;
@@ -353,6 +375,12 @@ impl ShellWriter {
             dt: info.dt,
             dt_limit: info.dt_limit,
             event_levels: info.event_levels,
+            integrator: if info.newmark.is_some() {
+                "newmark"
+            } else {
+                "explicit"
+            }
+            .into(),
             mass: info.mass,
             frames: Vec::new(),
             fragments: Vec::new(),
@@ -483,6 +511,15 @@ impl ShellWriter {
             search: (setup.info.event_levels > 0).then(|| SearchJson {
                 substeps: searched.stats().substeps,
                 rejected: searched.stats().rejected,
+            }),
+            newmark: setup.info.newmark.map(|_| {
+                let st = shell.newmark_stats();
+                NewmarkJson {
+                    solves: st.steps,
+                    iterations: st.iterations,
+                    capped: st.capped,
+                    factorizations: st.factorizations,
+                }
             }),
         };
         self.manifest.frames.push(frame.clone());

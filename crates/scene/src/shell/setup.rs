@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use perifrac_shell::{
-    generate, ExplicitShell, SearchedShell, ShellError, ShellFracture, ShellMaterial, ShellMesh,
-    ShellModel, ShellSearch, ShellSelfContact, ShellYield, Vec3,
+    generate, ExplicitShell, NewmarkConfig, SearchedShell, ShellError, ShellFracture,
+    ShellMaterial, ShellMesh, ShellModel, ShellSearch, ShellSelfContact, ShellYield, Vec3,
 };
 
 use crate::error::SceneError;
@@ -142,6 +142,8 @@ pub struct ShellSetupInfo {
     pub safety: f64,
     /// The event search's finest level (0: plain steps).
     pub event_levels: u32,
+    /// The implicit Newmark step's settings (`None`: explicit steps).
+    pub newmark: Option<NewmarkConfig>,
     /// World up.
     pub up: [f64; 3],
     /// Rest bounding box (m).
@@ -248,6 +250,52 @@ impl ShellSetup {
             };
             ctx.err(key, e.to_string())
         })?;
+        let newmark = match sim.integrator.as_deref() {
+            None | Some("explicit") => {
+                for (key, set) in [
+                    ("simulation.iterations", sim.iterations.is_some()),
+                    ("simulation.tolerance", sim.tolerance.is_some()),
+                ] {
+                    if set {
+                        return Err(ctx.err(
+                            key,
+                            "sets the implicit step: give integrator = \"newmark\" too",
+                        ));
+                    }
+                }
+                None
+            }
+            Some("newmark") => {
+                let defaults = NewmarkConfig::default();
+                let c = NewmarkConfig {
+                    max_iterations: sim.iterations.unwrap_or(defaults.max_iterations),
+                    tolerance: sim.tolerance.unwrap_or(defaults.tolerance),
+                    ..defaults
+                };
+                c.check().map_err(|e| {
+                    let key = if c.max_iterations == 0 {
+                        "simulation.iterations"
+                    } else {
+                        "simulation.tolerance"
+                    };
+                    ctx.err(key, e.to_string())
+                })?;
+                if fixed.is_none() {
+                    return Err(ctx.err(
+                        "simulation.dt",
+                        "the Newmark step has no stable limit to take a share of: give dt in \
+                         seconds",
+                    ));
+                }
+                Some(c)
+            }
+            Some(other) => {
+                return Err(ctx.err(
+                    "simulation.integrator",
+                    format!("\"{other}\": expected \"explicit\" or \"newmark\""),
+                ))
+            }
+        };
         let frames = frames
             .or(f.output.frames)
             .unwrap_or(crate::setup::defaults::FRAMES);
@@ -398,7 +446,7 @@ impl ShellSetup {
         let omega = 2.0 / shell_limit;
         let dt_limit = 2.0 / (omega * omega + ball_omega2).sqrt();
         let wanted = match fixed {
-            Some(dt) if dt > defaults::MAX_FIXED_FRACTION * dt_limit => {
+            Some(dt) if newmark.is_none() && dt > defaults::MAX_FIXED_FRACTION * dt_limit => {
                 return Err(ctx.err(
                     "simulation.dt",
                     format!(
@@ -425,6 +473,9 @@ impl ShellSetup {
                 ),
             });
         }
+        shell
+            .set_newmark(newmark)
+            .map_err(|e| ctx.err("simulation.integrator", e.to_string()))?;
         let info = ShellSetupInfo {
             vertices: rest.len(),
             triangles: shell.model().mesh().triangles().len(),
@@ -436,6 +487,7 @@ impl ShellSetup {
             safety,
             ball_omega2,
             event_levels: config.levels,
+            newmark,
             up: up_from_gravity(gravity),
             rest_bounds: bounds(&rest),
             plastic: m.yield_strain.is_some(),
