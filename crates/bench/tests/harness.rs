@@ -374,4 +374,10 @@ fn shell_egg_table_holds_every_run() {
     // The search does at least as many force evaluations as the plain run at its outer step.
     let evals = |r: &Vec<String>| r[2].parse::<u64>().unwrap();
     assert!(evals(&egg.rows[1]) >= evals(&egg.rows[0]));
+    // And with the implicit step: one plain run and one search, each solve counted.
+    let (nm, text) = perifrac_bench::shells::egg_newmark(Effort::Tiny, &mut quiet).unwrap();
+    assert_eq!(nm.rows.len(), 2);
+    assert!(text.contains("Newmark"));
+    assert_eq!(nm.rows[0][2], "20");
+    assert!(evals(&nm.rows[1]) >= 20);
 }

@@ -198,6 +198,7 @@ fn shells_report(c: &Common) -> Result<()> {
     let mut progress = report.progress();
     let e = effort(c);
     let (egg, text) = perifrac_bench::shells::egg_drop(e, &mut progress)?;
+    let (newmark, newmark_text) = perifrac_bench::shells::egg_newmark(e, &mut progress)?;
     let speed = perifrac_bench::shells::speed(e, &mut progress)?;
     let bulb = perifrac_bench::shells::bulb(e, &mut progress)?;
     let mut md = report.header("shells");
@@ -209,6 +210,9 @@ fn shells_report(c: &Common) -> Result<()> {
     md.push_str("## The event search on a dropped egg shell (the paper's Figure 9)\n\n");
     md.push_str(&format!("{text}\n\n"));
     md.push_str(&egg.to_markdown());
+    md.push_str("\n## The same drop with the paper's integrator (implicit Newmark)\n\n");
+    md.push_str(&format!("{newmark_text}\n\n"));
+    md.push_str(&newmark.to_markdown());
     md.push_str("\n## Speed: the force pass and the step with colliders\n\n");
     md.push_str(&speed.to_markdown());
     md.push_str(
