@@ -332,17 +332,18 @@ impl ExplicitShell {
                 capped = false;
                 break;
             };
-            // s = qt - q, y = gt - g into the ring.
-            let slot = head;
-            let mut sy = 0.0;
-            for k in 0..dofs {
-                let s = nm.qt[k] - nm.q[k];
-                let y = nm.gt[k] - nm.g[k];
-                nm.s_hist[slot][k] = s;
-                nm.y_hist[slot][k] = y;
-                sy += s * y;
-            }
+            // s = qt - q, y = gt - g into the ring, when curvature is positive along s (a
+            // pair that is not would break the two-loop's positive definiteness; the slot,
+            // the oldest pair once the ring is full, is then left as it was).
+            let sy: f64 = (0..dofs)
+                .map(|k| (nm.qt[k] - nm.q[k]) * (nm.gt[k] - nm.g[k]))
+                .sum();
             if cfg.history > 0 && sy > 0.0 {
+                let slot = head;
+                for k in 0..dofs {
+                    nm.s_hist[slot][k] = nm.qt[k] - nm.q[k];
+                    nm.y_hist[slot][k] = nm.gt[k] - nm.g[k];
+                }
                 nm.rho[slot] = 1.0 / sy;
                 head = (head + 1) % cfg.history;
                 count = (count + 1).min(cfg.history);
