@@ -9,7 +9,7 @@
 //! 95.1% of Kirchhoff's).
 
 use perifrac_shell::{
-    generate, ExplicitShell, NewmarkConfig, ShellMaterial, ShellMesh, ShellModel,
+    generate, NewmarkConfig, ShellDynamics, ShellMaterial, ShellMesh, ShellModel,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (nx, ny) in [(10, 2), (20, 4), (40, 8)] {
         let s = generate::sheet(length, width, nx, ny)?;
         let mesh = ShellMesh::new(s.vertices.clone(), s.triangles.clone())?;
-        let mut shell = ExplicitShell::new(ShellModel::new(mesh, steel)?)?;
+        let mut shell = ShellDynamics::new(ShellModel::new(mesh, steel)?)?;
         // Two rows of vertices held: their triangles stay flat, which clamps the slope.
         let dx = length / nx as f64;
         for (i, p) in s.vertices.iter().enumerate() {

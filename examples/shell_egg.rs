@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use perifrac_contact::{Colliders, ContactParams, GroundDesc};
 use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
 use perifrac_shell::{
-    generate, ExplicitShell, SearchedShell, ShellFracture, ShellMaterial, ShellMesh, ShellModel,
+    generate, SearchedShell, ShellDynamics, ShellFracture, ShellMaterial, ShellMesh, ShellModel,
     ShellSearch,
 };
 
@@ -32,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let shellmat = ShellMaterial::new(30e9, 0.3, 2000.0, h)?;
     let model =
         ShellModel::new(mesh, shellmat)?.with_fracture(ShellFracture::new(2e-3, 2e-3, 0.25, 1.0)?);
-    let mut shell = ExplicitShell::new(model)?;
+    let mut shell = ShellDynamics::new(model)?;
     for v in shell.velocities_mut() {
         *v = [0.0, 0.0, -speed];
     }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use perifrac_contact::{Colliders, ContactParams, GroundDesc};
 use perifrac_shell::{
-    generate, ExplicitShell, NewmarkConfig, SearchedShell, ShellError, ShellFracture,
+    generate, NewmarkConfig, SearchedShell, ShellDynamics, ShellError, ShellFracture,
     ShellMaterial, ShellMesh, ShellModel, ShellSearch,
 };
 
@@ -26,7 +26,7 @@ pub(crate) fn shell_error(case: &str) -> impl Fn(ShellError) -> BenchError + '_ 
 
 /// The egg of [`egg_drop`]: an ellipsoidal shell (22 x 22 x 29 mm half-axes, 0.35 mm, 30 GPa,
 /// breaking at a principal strain of 2e-3) just above the ground, falling at `speed`.
-fn egg(subdivisions: u32, speed: f64) -> Result<ExplicitShell, ShellError> {
+fn egg(subdivisions: u32, speed: f64) -> Result<ShellDynamics, ShellError> {
     let s = generate::ellipsoid([0.022, 0.022, 0.029], subdivisions)
         .map_err(|e| ShellError::Contact(e.to_string()))?;
     let h = 3.5e-4;
@@ -39,7 +39,7 @@ fn egg(subdivisions: u32, speed: f64) -> Result<ExplicitShell, ShellError> {
     let material = ShellMaterial::new(30e9, 0.3, 2000.0, h)?;
     let model =
         ShellModel::new(mesh, material)?.with_fracture(ShellFracture::new(2e-3, 2e-3, 0.25, 1.0)?);
-    let mut shell = ExplicitShell::new(model)?;
+    let mut shell = ShellDynamics::new(model)?;
     for v in shell.velocities_mut() {
         *v = [0.0, 0.0, -speed];
     }
@@ -314,7 +314,7 @@ fn outcome(ran_away: Option<f64>, broken: usize, mesh: &ShellMesh) -> (String, S
 /// `probe` stepped `steps` times by the search over steps of `dt` (s) to level `k` with force
 /// growth `growth`, and the wall time it took (s).
 fn search_run(
-    probe: &ExplicitShell,
+    probe: &ShellDynamics,
     k: u32,
     growth: f64,
     dt: f64,
@@ -421,7 +421,7 @@ pub fn speed(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Be
             },
             params: ContactParams::from_material(70e9, 2.5e-4, 1.0, 0.1, 0.3),
         };
-        let plain = ExplicitShell::new(model.clone()).map_err(shell_error(&case))?;
+        let plain = ShellDynamics::new(model.clone()).map_err(shell_error(&case))?;
         let mut touching = plain.clone();
         let colliders = Colliders::new(vec![ground], vec![ball], [0.0; 3])
             .map_err(|e| shell_error(&case)(ShellError::Contact(e.to_string())))?;

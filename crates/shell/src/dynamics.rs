@@ -35,9 +35,9 @@ pub(crate) struct Snapshot {
 
 /// A shell moving under its elastic forces, gravity, pinned vertices, colliders and (when set)
 /// its own pieces' repulsion, stepped explicitly, or by implicit Newmark when
-/// [`ExplicitShell::set_newmark`] says so.
+/// [`ShellDynamics::set_newmark`] says so.
 #[derive(Debug, Clone)]
-pub struct ExplicitShell {
+pub struct ShellDynamics {
     model: ShellModel,
     x: Vec<Vec3>,
     v: Vec<Vec3>,
@@ -65,14 +65,14 @@ pub struct ExplicitShell {
     topology: u64,
 }
 
-impl ExplicitShell {
+impl ShellDynamics {
     /// The shell at rest at its mesh's vertices, at time 0, without gravity.
-    pub fn new(mut model: ShellModel) -> Result<ExplicitShell, ShellError> {
+    pub fn new(mut model: ShellModel) -> Result<ShellDynamics, ShellError> {
         let x = model.mesh().vertices().to_vec();
         let n = x.len();
         let mut f = vec![[0.0; 3]; n];
         let elastic = model.forces(&x, &mut f)?;
-        Ok(ExplicitShell {
+        Ok(ShellDynamics {
             model,
             x,
             v: vec![[0.0; 3]; n],
@@ -123,7 +123,7 @@ impl ExplicitShell {
         }
     }
 
-    /// Puts back what [`ExplicitShell::save`] kept (the mesh must not have changed between).
+    /// Puts back what [`ShellDynamics::save`] kept (the mesh must not have changed between).
     pub(crate) fn restore(&mut self, s: &Snapshot) {
         self.x.clone_from(&s.x);
         self.v.clone_from(&s.v);
@@ -204,7 +204,7 @@ impl ExplicitShell {
 
     /// Turns repulsion between the shell's own pieces on with `params` (or off with `None`)
     /// and evaluates the forces at the current positions, as
-    /// [`ExplicitShell::set_positions`] does (the colliders' come back with the next step).
+    /// [`ShellDynamics::set_positions`] does (the colliders' come back with the next step).
     /// Off by default: a shell without it spends nothing on it.
     pub fn set_self_contact(&mut self, params: Option<ShellSelfContact>) -> Result<(), ShellError> {
         self.self_contact = match params {
@@ -491,7 +491,7 @@ impl ExplicitShell {
 
     /// The stable step (s) at the current positions: `2 / omega` with `omega^2` the highest
     /// squared angular frequency of the elastic forces ([`max_frequency`]) plus what the
-    /// colliders add ([`ExplicitShell::collider_omega2`]). Fracture adds light vertices, so
+    /// colliders add ([`ShellDynamics::collider_omega2`]). Fracture adds light vertices, so
     /// both grow after splits: measure again after them.
     pub fn stable_step(&mut self) -> Result<f64, ShellError> {
         let x = self.x.clone();

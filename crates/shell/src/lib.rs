@@ -10,7 +10,7 @@
 //! let s = generate::sheet(0.1, 0.1, 4, 4)?;
 //! let mesh = ShellMesh::new(s.vertices, s.triangles)?;
 //! let steel = ShellMaterial::new(200e9, 0.3, 7800.0, 1e-3)?;
-//! let mut shell = ExplicitShell::new(ShellModel::new(mesh, steel)?)?;
+//! let mut shell = ShellDynamics::new(ShellModel::new(mesh, steel)?)?;
 //! shell.velocities_mut()[12] = [0.0, 0.0, 1.0];
 //! let dt = 0.5 * shell.stable_step()?;
 //! shell.step(dt)?;
@@ -35,7 +35,7 @@ pub mod proximity;
 pub mod search;
 pub mod self_contact;
 
-pub use dynamics::{max_frequency, ExplicitShell, NewmarkConfig, NewmarkStats};
+pub use dynamics::{max_frequency, NewmarkConfig, NewmarkStats, ShellDynamics};
 pub use error::ShellError;
 pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;

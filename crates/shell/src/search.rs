@@ -7,7 +7,7 @@
 //! updated (inside its force pass), over-strained triangles break, and `k` falls by one; `k`
 //! carries over from step to step, so steps stay fine while forces keep jumping.
 
-use crate::dynamics::{ExplicitShell, Snapshot};
+use crate::dynamics::{ShellDynamics, Snapshot};
 use crate::error::{bad_setting, ShellError};
 use crate::fracture::FractureEvent;
 
@@ -87,7 +87,7 @@ pub struct SearchStats {
 /// largest force seen.
 #[derive(Debug, Clone)]
 pub struct SearchedShell {
-    shell: ExplicitShell,
+    shell: ShellDynamics,
     config: ShellSearch,
     k: u32,
     peak: f64,
@@ -97,7 +97,7 @@ pub struct SearchedShell {
 
 impl SearchedShell {
     /// Wraps `shell`; checks the settings.
-    pub fn new(shell: ExplicitShell, config: ShellSearch) -> Result<SearchedShell, ShellError> {
+    pub fn new(shell: ShellDynamics, config: ShellSearch) -> Result<SearchedShell, ShellError> {
         config.check()?;
         let peak = shell.largest_force();
         Ok(SearchedShell {
@@ -111,12 +111,12 @@ impl SearchedShell {
     }
 
     /// The shell.
-    pub fn shell(&self) -> &ExplicitShell {
+    pub fn shell(&self) -> &ShellDynamics {
         &self.shell
     }
 
     /// The shell, to change (velocities, pins).
-    pub fn shell_mut(&mut self) -> &mut ExplicitShell {
+    pub fn shell_mut(&mut self) -> &mut ShellDynamics {
         &mut self.shell
     }
 

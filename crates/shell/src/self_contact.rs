@@ -368,13 +368,13 @@ fn edge_edge(x: &[Vec3], e: [u32; 2], g: [u32; 2], scale_c: f64, band: f64, k: f
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::dynamics::{ExplicitShell, Snapshot};
+    use crate::dynamics::{ShellDynamics, Snapshot};
     use crate::generate::sheet;
     use crate::model::ShellModel;
 
     /// Two 2 x 2 cm steel sheets, 1 cm apart at rest, placed 0.49 mm apart (just inside the
     /// band) and closing at 1 m/s.
-    fn pressed() -> ExplicitShell {
+    fn pressed() -> ShellDynamics {
         let s = sheet(0.02, 0.02, 6, 6).unwrap();
         let nv = s.vertices.len();
         let mut v = s.vertices.clone();
@@ -383,7 +383,7 @@ mod tests {
         t.extend(s.triangles.iter().map(|t| t.map(|i| i + nv as u32)));
         let mesh = ShellMesh::new(v, t).unwrap();
         let steel = ShellMaterial::new(200e9, 0.3, 7800.0, 1e-3).unwrap();
-        let mut shell = ExplicitShell::new(ShellModel::new(mesh, steel).unwrap()).unwrap();
+        let mut shell = ShellDynamics::new(ShellModel::new(mesh, steel).unwrap()).unwrap();
         shell
             .set_self_contact(Some(ShellSelfContact::default()))
             .unwrap();

@@ -4,13 +4,13 @@ use perifrac_contact::{BallDesc, BallMotion, Colliders, ContactParams, GroundDes
 use perifrac_shell::generate::sheet;
 use perifrac_shell::*;
 
-fn steel_sheet() -> ExplicitShell {
+fn steel_sheet() -> ShellDynamics {
     // A 4 x 4 cm steel sheet, 1 mm thick, 2 mm above the ground.
     let s = sheet(0.04, 0.04, 8, 8).unwrap();
     let v: Vec<_> = s.vertices.iter().map(|p| [p[0], p[1], 0.002]).collect();
     let mesh = ShellMesh::new(v, s.triangles).unwrap();
     let steel = ShellMaterial::new(200e9, 0.3, 7800.0, 1e-3).unwrap();
-    ExplicitShell::new(ShellModel::new(mesh, steel).unwrap()).unwrap()
+    ShellDynamics::new(ShellModel::new(mesh, steel).unwrap()).unwrap()
 }
 
 fn ground() -> GroundDesc {
@@ -81,7 +81,7 @@ fn fracture_adds_vertices_that_contact_follows() {
     let model = ShellModel::new(mesh, glass)
         .unwrap()
         .with_fracture(ShellFracture::new(1e-3, 1e-3, 0.25, 1.0).unwrap());
-    let mut shell = ExplicitShell::new(model).unwrap();
+    let mut shell = ShellDynamics::new(model).unwrap();
     for (i, p) in v.iter().enumerate() {
         if p[0] < 1e-9 {
             shell.drive(i, [-1.0, 0.0, 0.0]);

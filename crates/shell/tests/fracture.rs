@@ -75,11 +75,11 @@ fn crack_tilt(m: &ShellModel) -> (f64, usize) {
 /// lower edge (the triangles at the vertex (5 cm, 0) taken out), pulled apart along x by its
 /// end columns at `speed` m/s each, damped at `damping` 1/s; it breaks at a principal strain
 /// of 1e-3.
-fn notched_sheet(budge: f64, speed: f64, damping: f64) -> ExplicitShell {
+fn notched_sheet(budge: f64, speed: f64, damping: f64) -> ShellDynamics {
     notched(budge, 1.0, speed, damping)
 }
 
-fn notched(budge: f64, release: f64, speed: f64, damping: f64) -> ExplicitShell {
+fn notched(budge: f64, release: f64, speed: f64, damping: f64) -> ShellDynamics {
     let s = sheet(0.1, 0.05, 20, 10).unwrap();
     let notch = s
         .vertices
@@ -99,7 +99,7 @@ fn notched(budge: f64, release: f64, speed: f64, damping: f64) -> ExplicitShell 
     let model = ShellModel::new(mesh, glass)
         .unwrap()
         .with_fracture(ShellFracture::new(1e-3, 1e-3, budge, release).unwrap());
-    let mut shell = ExplicitShell::new(model).unwrap();
+    let mut shell = ShellDynamics::new(model).unwrap();
     shell.set_damping(damping).unwrap();
     for (i, p) in verts.iter().enumerate() {
         if p[0] < 1e-9 {
@@ -222,7 +222,7 @@ fn the_search_without_rejections_is_the_plain_step() {
     let s = sheet(0.1, 0.05, 10, 5).unwrap();
     let mesh = ShellMesh::new(s.vertices.clone(), s.triangles.clone()).unwrap();
     let glass = ShellMaterial::new(70e9, 0.22, 2500.0, 1e-3).unwrap();
-    let mut plain = ExplicitShell::new(ShellModel::new(mesh, glass).unwrap()).unwrap();
+    let mut plain = ShellDynamics::new(ShellModel::new(mesh, glass).unwrap()).unwrap();
     for (i, v) in plain.velocities_mut().iter_mut().enumerate() {
         *v = [0.0, 0.0, 0.01 * (i % 7) as f64];
     }

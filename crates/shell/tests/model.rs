@@ -282,7 +282,7 @@ fn energy_is_conserved_without_damping() {
     // total energy within a bounded oscillation of relative size O((omega dt)^2) for the
     // highest mode excited; measured 1.8e-4 over 2,000 steps (bound 5e-4).
     let s = sheet(0.1, 0.1, 10, 10).unwrap();
-    let mut shell = ExplicitShell::new(model(&s, 1e-3)).unwrap();
+    let mut shell = ShellDynamics::new(model(&s, 1e-3)).unwrap();
     for (v, p) in shell.velocities_mut().iter_mut().zip(&s.vertices) {
         let (x, y) = (p[0] / 0.1, p[1] / 0.1);
         *v = [
@@ -337,7 +337,7 @@ fn the_stable_step_estimate_is_the_edge_of_stability() {
     // up. A sheet kicked at one vertex (every mode excited), 3,000 steps each.
     let s = sheet(0.1, 0.1, 8, 8).unwrap();
     let run = |factor: f64| {
-        let mut shell = ExplicitShell::new(model(&s, 1e-3)).unwrap();
+        let mut shell = ShellDynamics::new(model(&s, 1e-3)).unwrap();
         let limit = shell.stable_step().unwrap();
         shell.velocities_mut()[40] = [0.3, -0.2, 1.0];
         let e0 = shell.kinetic_energy();

@@ -6,18 +6,18 @@ use perifrac_physics::math::{dot, sub, Vec3};
 use perifrac_shell::generate::sheet;
 use perifrac_shell::*;
 
-fn steel_sheet() -> (ExplicitShell, Vec<Vec3>) {
+fn steel_sheet() -> (ShellDynamics, Vec<Vec3>) {
     // A 10 x 10 cm steel sheet, 1 mm thick, 10 x 10 quads.
     let s = sheet(0.1, 0.1, 10, 10).unwrap();
     let mesh = ShellMesh::new(s.vertices.clone(), s.triangles.clone()).unwrap();
     let steel = ShellMaterial::new(200e9, 0.3, 7800.0, 1e-3).unwrap();
-    let shell = ExplicitShell::new(ShellModel::new(mesh, steel).unwrap()).unwrap();
+    let shell = ShellDynamics::new(ShellModel::new(mesh, steel).unwrap()).unwrap();
     (shell, s.vertices)
 }
 
 /// The sheet set vibrating in and out of its plane by a smooth velocity field (the model
 /// test's), free, no gravity.
-fn vibrating_sheet() -> ExplicitShell {
+fn vibrating_sheet() -> ShellDynamics {
     let (mut shell, x) = steel_sheet();
     for (v, p) in shell.velocities_mut().iter_mut().zip(&x) {
         let (x, y) = (p[0] / 0.1, p[1] / 0.1);
@@ -30,11 +30,11 @@ fn vibrating_sheet() -> ExplicitShell {
     shell
 }
 
-fn energy(s: &ExplicitShell) -> f64 {
+fn energy(s: &ShellDynamics) -> f64 {
     s.kinetic_energy() + s.elastic_energy()
 }
 
-fn momentum(s: &ExplicitShell) -> Vec3 {
+fn momentum(s: &ShellDynamics) -> Vec3 {
     let mut p = [0.0; 3];
     for (v, m) in s.velocities().iter().zip(s.model().masses()) {
         for k in 0..3 {

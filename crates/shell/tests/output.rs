@@ -31,7 +31,7 @@ fn a_thick_frame_of_a_broken_sheet_is_closed_with_the_pieces_volume_and_crack_wa
     let model = ShellModel::new(mesh, glass)
         .unwrap()
         .with_fracture(ShellFracture::new(1e-3, 1e-3, 0.25, 1.0).unwrap());
-    let mut shell = ExplicitShell::new(model).unwrap();
+    let mut shell = ShellDynamics::new(model).unwrap();
     for (i, p) in s.vertices.iter().enumerate() {
         if p[0] < 1e-9 {
             shell.drive(i, [-1.0, 0.0, 0.0]);

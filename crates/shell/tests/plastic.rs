@@ -110,7 +110,7 @@ fn hardening_takes_less_of_the_strain_into_plastic_strain() {
 
 /// Damped relaxation from `x` (held nowhere) for `steps` steps; the final positions.
 fn relax(m: ShellModel, x: &[Vec3], steps: usize) -> Vec<Vec3> {
-    let mut shell = ExplicitShell::new(m).unwrap();
+    let mut shell = ShellDynamics::new(m).unwrap();
     shell.set_positions(x).unwrap();
     shell.set_damping(3000.0).unwrap();
     let dt = 0.8 * shell.stable_step().unwrap();
@@ -165,7 +165,7 @@ fn the_stable_step_estimate_leaves_the_plastic_state_alone() {
     // The estimate probes the forces at displaced positions; it must not return-map there.
     let (_, m) = strip(20, 4, Some(ShellYield::new(1e-3, 0.0).unwrap()));
     let bent = bent_sheet(0.1, 0.02, 20, 4, 0.05).unwrap();
-    let mut shell = ExplicitShell::new(m).unwrap();
+    let mut shell = ShellDynamics::new(m).unwrap();
     shell.set_positions(&bent.vertices).unwrap();
     let before = shell.model().plastic_strains();
     assert!(before.iter().any(|p| p.bending != [0.0; 3]));

@@ -32,8 +32,8 @@ fn two_sheets(size: f64, n: usize, gap: f64, shift: [f64; 2]) -> ShellMesh {
 }
 
 /// A shell of `mesh` with default self-contact.
-fn shell_of(mesh: ShellMesh) -> ExplicitShell {
-    let mut shell = ExplicitShell::new(ShellModel::new(mesh, steel()).unwrap()).unwrap();
+fn shell_of(mesh: ShellMesh) -> ShellDynamics {
+    let mut shell = ShellDynamics::new(ShellModel::new(mesh, steel()).unwrap()).unwrap();
     shell
         .set_self_contact(Some(ShellSelfContact::default()))
         .unwrap();
@@ -41,7 +41,7 @@ fn shell_of(mesh: ShellMesh) -> ExplicitShell {
 }
 
 /// The upper sheet (vertices from `half` on) moved down to z = `gap`.
-fn lowered(shell: &mut ExplicitShell, half: usize, gap: f64) {
+fn lowered(shell: &mut ShellDynamics, half: usize, gap: f64) {
     let mut x = shell.positions().to_vec();
     for p in &mut x[half..] {
         p[2] = gap;
@@ -49,7 +49,7 @@ fn lowered(shell: &mut ExplicitShell, half: usize, gap: f64) {
     shell.set_positions(&x).unwrap();
 }
 
-fn total_energy(s: &ExplicitShell) -> f64 {
+fn total_energy(s: &ShellDynamics) -> f64 {
     s.kinetic_energy() + s.elastic_energy() + s.gravity_energy() + s.self_contact_energy()
 }
 
@@ -309,7 +309,7 @@ fn a_real_crack_opens_without_self_contact_force() {
     let model = ShellModel::new(mesh, glass)
         .unwrap()
         .with_fracture(ShellFracture::new(1e-3, 1e-3, 0.25, 1.0).unwrap());
-    let mut shell = ExplicitShell::new(model).unwrap();
+    let mut shell = ShellDynamics::new(model).unwrap();
     shell
         .set_self_contact(Some(ShellSelfContact::default()))
         .unwrap();
@@ -449,7 +449,7 @@ fn a_sheet_dropped_on_a_pinned_one_stays_above_it() {
 
 /// Two free 4 x 4 cm sheets of `n` x `n` quads, 1 cm apart at rest, placed `gap` apart and
 /// closing at 1 m/s.
-fn colliding(n: usize, gap: f64) -> (ExplicitShell, usize) {
+fn colliding(n: usize, gap: f64) -> (ShellDynamics, usize) {
     let mesh = two_sheets(0.04, n, 0.01, [1.1e-3, 0.7e-3]);
     let half = mesh.num_vertices() / 2;
     let mut shell = shell_of(mesh);
@@ -561,7 +561,7 @@ fn cost_on_the_egg() {
     let steps = 400;
     let time = |on: bool| {
         let mesh = ShellMesh::new(s.vertices.clone(), s.triangles.clone()).unwrap();
-        let mut shell = ExplicitShell::new(ShellModel::new(mesh, mat).unwrap()).unwrap();
+        let mut shell = ShellDynamics::new(ShellModel::new(mesh, mat).unwrap()).unwrap();
         if on {
             shell
                 .set_self_contact(Some(ShellSelfContact::default()))

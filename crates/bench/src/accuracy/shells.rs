@@ -18,7 +18,7 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use perifrac_shell::{generate, ExplicitShell, ShellMaterial, ShellMesh, ShellModel};
+use perifrac_shell::{generate, ShellDynamics, ShellMaterial, ShellMesh, ShellModel};
 
 use super::{table_and_plot, CaseReport, Run};
 use crate::shells::shell_error;
@@ -43,7 +43,7 @@ fn mesh_error(case: &str) -> impl Fn(perifrac_shell::generate::GenerateError) ->
 }
 
 /// Steps `shell` damped at `c` (1/s) for `time` (s) at 0.8 of its stable step; the steps taken.
-fn relax(shell: &mut ExplicitShell, c: f64, time: f64, case: &str) -> Result<u64, BenchError> {
+fn relax(shell: &mut ShellDynamics, c: f64, time: f64, case: &str) -> Result<u64, BenchError> {
     shell.set_damping(c).map_err(shell_error(case))?;
     let dt = 0.8 * shell.stable_step().map_err(shell_error(case))?;
     let steps = (time / dt).ceil() as u64;
@@ -166,7 +166,7 @@ pub fn shell_strip(
         let s = generate::sheet_uniform(l, b, nx, ny).map_err(mesh_error(&case))?;
         let mesh = ShellMesh::new(s.vertices.clone(), s.triangles).map_err(shell_error(&case))?;
         let model = ShellModel::new(mesh, steel).map_err(shell_error(&case))?;
-        let mut shell = ExplicitShell::new(model).map_err(shell_error(&case))?;
+        let mut shell = ShellDynamics::new(model).map_err(shell_error(&case))?;
         let dx = l / nx as f64;
         // Two rows held: their triangles stay flat, clamping the slope.
         for (i, p) in s.vertices.iter().enumerate() {
@@ -231,7 +231,7 @@ pub fn shell_plate(
         let s = generate::sheet_uniform(a, a, n, n).map_err(mesh_error(&case))?;
         let mesh = ShellMesh::new(s.vertices.clone(), s.triangles).map_err(shell_error(&case))?;
         let model = ShellModel::new(mesh, steel).map_err(shell_error(&case))?;
-        let mut shell = ExplicitShell::new(model).map_err(shell_error(&case))?;
+        let mut shell = ShellDynamics::new(model).map_err(shell_error(&case))?;
         // The edge held in place, free to turn about it: simply supported.
         for (i, p) in s.vertices.iter().enumerate() {
             let edge = |x: f64| x < 1e-9 || x > a - 1e-9;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use perifrac_shell::{
-    generate, ExplicitShell, NewmarkConfig, SearchedShell, ShellError, ShellFracture,
+    generate, NewmarkConfig, SearchedShell, ShellDynamics, ShellError, ShellFracture,
     ShellMaterial, ShellMesh, ShellModel, ShellSearch, ShellSelfContact, ShellYield, Vec3,
 };
 
@@ -368,7 +368,7 @@ impl ShellSetup {
             model = model.with_fracture(params);
         }
         let mass: f64 = model.masses().iter().sum();
-        let mut shell = ExplicitShell::new(model).map_err(|e| ctx.err("shell", e.to_string()))?;
+        let mut shell = ShellDynamics::new(model).map_err(|e| ctx.err("shell", e.to_string()))?;
         shell.set_gravity(gravity);
         shell
             .set_damping(damping)

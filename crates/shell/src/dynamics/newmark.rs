@@ -23,7 +23,7 @@
 
 use std::time::Instant;
 
-use super::ExplicitShell;
+use super::ShellDynamics;
 use crate::block_matrix::BlockMatrix;
 use crate::error::{bad_setting, ShellError};
 use perifrac_physics::math::{axpy, dot, scale, sub, Vec3};
@@ -167,7 +167,7 @@ impl Newmark {
     }
 }
 
-impl ExplicitShell {
+impl ShellDynamics {
     /// One implicit Newmark step of `h` (s); see the module's text.
     pub(super) fn newmark_step(&mut self, h: f64) -> Result<(), ShellError> {
         let Some(mut nm) = self.newmark.take() else {
