@@ -122,7 +122,6 @@ pub(crate) struct Newmark {
     gq: Vec<Vec3>,
     bodies: Vec<Vec3>,
     gc: Vec<Vec3>,
-    held: Vec<bool>,
     /// Unknowns, gradient, direction, trial point and gradient: free vertices' then bodies'.
     q: Vec<f64>,
     g: Vec<f64>,
@@ -164,6 +163,50 @@ impl Newmark {
 
     pub(crate) fn config(&self) -> NewmarkConfig {
         self.config
+    }
+
+    /// Spreads the unknowns `q`, or the trial point `qt` (`trial`), over the positions `y` of
+    /// the free vertices (held ones keep their place) and the bodies' centres.
+    fn spread(&mut self, trial: bool) {
+        let Some(matrix) = &self.matrix else {
+            return;
+        };
+        let q = if trial { &self.qt } else { &self.q };
+        for (k, &vi) in matrix.vertices.iter().enumerate() {
+            self.y[vi as usize] = [q[3 * k], q[3 * k + 1], q[3 * k + 2]];
+        }
+        let nf = matrix.len();
+        for (b, c) in self.bodies.iter_mut().enumerate() {
+            let k = 3 * (nf + b);
+            *c = [q[k], q[k + 1], q[k + 2]];
+        }
+    }
+
+    /// The L-BFGS direction `-H g` into `d` from the newest `count` pairs of the ring (the next
+    /// slot is `head`), with the factored matrix as `H_0`.
+    fn direction(&mut self, count: usize, head: usize) {
+        let hist = self.s_hist.len();
+        self.d.copy_from_slice(&self.g);
+        for j in 0..count {
+            let slot = (head + hist - 1 - j) % hist;
+            let a = self.rho[slot] * dot_flat(&self.s_hist[slot], &self.d);
+            self.alpha[slot] = a;
+            axpy_flat(&mut self.d, -a, &self.y_hist[slot]);
+        }
+        let matrix = self.matrix.as_mut().expect("built before the solve");
+        let nf = matrix.len();
+        matrix.solve(&mut self.d[..3 * nf]);
+        for (b, &k) in self.body_diag.iter().enumerate() {
+            for c in 0..3 {
+                self.d[3 * (nf + b) + c] /= k;
+            }
+        }
+        for j in (0..count).rev() {
+            let slot = (head + hist - 1 - j) % hist;
+            let b = self.rho[slot] * dot_flat(&self.y_hist[slot], &self.d);
+            axpy_flat(&mut self.d, self.alpha[slot] - b, &self.s_hist[slot]);
+        }
+        self.d.iter_mut().for_each(|d| *d = -*d);
     }
 }
 
@@ -294,13 +337,13 @@ impl ShellDynamics {
                 break;
             }
             iterations += 1;
-            self.newmark_direction(nm, count, head);
+            nm.direction(count, head);
             let slope: f64 = nm.g.iter().zip(&nm.d).map(|(a, b)| a * b).sum();
             if slope.is_nan() || slope >= 0.0 {
                 // Not a descent direction (round-off at the bottom): start the history again
                 // (the factored matrix alone is positive definite).
                 count = 0;
-                self.newmark_direction(nm, 0, head);
+                nm.direction(0, head);
             }
             let slope: f64 = nm.g.iter().zip(&nm.d).map(|(a, b)| a * b).sum();
             let mut step = 1.0;
@@ -363,7 +406,7 @@ impl ShellDynamics {
             nm.stats.capped += 1;
         }
         // Accept: positions, the forces there (with the plastic update), the contact state.
-        self.newmark_positions(nm);
+        nm.spread(false);
         self.x.copy_from_slice(&nm.y);
         self.elastic = self.model.forces(&self.x, &mut self.f)?;
         self.add_self_contact()?;
@@ -418,8 +461,7 @@ impl ShellDynamics {
             None => true,
         };
         if rebuilt {
-            nm.held.clone_from(&self.pinned);
-            nm.matrix = Some(BlockMatrix::new(self.model.mesh(), &nm.held)?);
+            nm.matrix = Some(BlockMatrix::new(self.model.mesh(), &self.pinned)?);
             nm.topology = Some(self.topology);
         }
         let matrix = nm.matrix.as_mut().expect("built above");
@@ -462,24 +504,6 @@ impl ShellDynamics {
         Ok(())
     }
 
-    /// Spreads the unknowns `q` (free vertices) over `nm.y` (held vertices keep their place).
-    fn newmark_positions(&self, nm: &mut Newmark) {
-        let Some(matrix) = &nm.matrix else {
-            return;
-        };
-        for (k, &vi) in matrix.vertices.iter().enumerate() {
-            nm.y[vi as usize] = [nm.q[3 * k], nm.q[3 * k + 1], nm.q[3 * k + 2]];
-        }
-        let nf = matrix.len();
-        for (b, c) in nm.bodies.iter_mut().enumerate() {
-            *c = [
-                nm.q[3 * (nf + b)],
-                nm.q[3 * (nf + b) + 1],
-                nm.q[3 * (nf + b) + 2],
-            ];
-        }
-    }
-
     /// `Phi` at `q` (`at_q`) or at the trial point `qt`, and its gradient into `gt`.
     fn newmark_phi(
         &mut self,
@@ -487,13 +511,7 @@ impl ShellDynamics {
         inertia: f64,
         at_q: bool,
     ) -> Result<f64, ShellError> {
-        if !at_q {
-            std::mem::swap(&mut nm.q, &mut nm.qt);
-        }
-        self.newmark_positions(nm);
-        if !at_q {
-            std::mem::swap(&mut nm.q, &mut nm.qt);
-        }
+        nm.spread(!at_q);
         if nm.y.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
             return Ok(f64::INFINITY);
         }
@@ -522,32 +540,6 @@ impl ShellDynamics {
             nm.gt[3 * (nf + b)..3 * (nf + b) + 3].copy_from_slice(gc);
         }
         Ok(e)
-    }
-
-    /// The L-BFGS direction `-H g` into `nm.d`, with the factored matrix as `H_0`.
-    fn newmark_direction(&self, nm: &mut Newmark, count: usize, head: usize) {
-        let hist = nm.s_hist.len();
-        nm.d.copy_from_slice(&nm.g);
-        for j in 0..count {
-            let slot = (head + hist - 1 - j) % hist;
-            let a = nm.rho[slot] * dot_flat(&nm.s_hist[slot], &nm.d);
-            nm.alpha[slot] = a;
-            axpy_flat(&mut nm.d, -a, &nm.y_hist[slot]);
-        }
-        let matrix = nm.matrix.as_mut().expect("built before the solve");
-        let nf = matrix.len();
-        matrix.solve(&mut nm.d[..3 * nf]);
-        for (b, &k) in nm.body_diag.iter().enumerate() {
-            for c in 0..3 {
-                nm.d[3 * (nf + b) + c] /= k;
-            }
-        }
-        for j in (0..count).rev() {
-            let slot = (head + hist - 1 - j) % hist;
-            let b = nm.rho[slot] * dot_flat(&nm.y_hist[slot], &nm.d);
-            axpy_flat(&mut nm.d, nm.alpha[slot] - b, &nm.s_hist[slot]);
-        }
-        nm.d.iter_mut().for_each(|d| *d = -*d);
     }
 }
 
