@@ -10,7 +10,7 @@ pub enum PhysicsError {
     LengthMismatch {
         /// Which array.
         what: &'static str,
-        /// Number of particles (tets).
+        /// Entries expected: one per particle (tet), or per bond where `what` says so.
         expected: usize,
         /// Length supplied.
         got: usize,

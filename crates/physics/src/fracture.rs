@@ -6,7 +6,7 @@ use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use crate::family::Family;
 use crate::material::kernel::Plastic;
 use crate::math::{norm, sub, Vec3};
-use crate::par::{for_rows_mut2, map_particles};
+use crate::par::{for_rows, map_particles};
 
 /// Damage state: which bonds are intact, and the per-particle counts behind `phi`.
 #[derive(Debug, Clone)]
@@ -105,21 +105,24 @@ impl Damage {
             + (s_crit.len() + alpha.len() + threshold.len()) * 8
     }
 
-    /// Breaks bonds at positions `y` (m), horizon `delta` (m), plastic extensions `p`; appends
-    /// the newly broken pairs `(i, j)`, `i < j`, in increasing order.
+    /// Breaks bonds at positions `y` (m), horizon `delta` (m), plastic extensions `p` of which
+    /// none is less than `floor` (m, at most 0; 0 without plasticity); appends the newly broken
+    /// pairs `(i, j)`, `i < j`, in increasing order.
     pub(crate) fn check<P: Plastic>(
         &mut self,
         family: &Family,
         y: &[Vec3],
         delta: f64,
-        p: P,
+        (p, floor): (P, f64),
         broken: &mut Vec<(u32, u32)>,
     ) {
+        // zero-sized: no storage
         let mut none = vec![(); family.len()];
+        let mut no_bonds = vec![(); family.num_bonds()];
         // (e - ep) <= (e - floor) for every plastic extension ep, also in floating point, so a
         // bond whose (e - floor) is below the least threshold cannot break.
-        let floor = p.floor();
-        self.check_with(family, y, delta, p, broken, &mut none, &|i, row, brk| {
+        let out = (&mut none[..], &mut no_bonds[..]);
+        self.visit_check(family, delta, out, &|i, row, _: &mut [()], brk| {
             let first = family.range(i).start;
             let yi = y[i];
             let mut count = 0;
@@ -129,7 +132,7 @@ impl Damage {
                 }
                 let j = family.neighbours()[k] as usize;
                 let e = norm(sub(y[j], yi)) - family.rest_lengths()[k];
-                // Bonds far from breaking skip the plastic extensions' loads (one a gather).
+                // Bonds far from breaking skip the plastic extensions' loads.
                 if brk.near(e - floor) && brk.breaks(i, j, e, p.pair(k)) {
                     row[k - first] = 2;
                     count += 1;
@@ -137,26 +140,24 @@ impl Damage {
             }
             ((), count)
         });
+        self.finish_check(family, y, delta, p, broken);
     }
 
-    /// A check whose bond pass is `visit`'s: for each particle `i`, `visit(i, row, breaker)`
-    /// walks `i`'s own bond states `row` (1 intact, 0 broken), marks with 2 the intact bonds
-    /// that [`Breaker::breaks`] says go now, and returns what it computed for `i` (stored in
-    /// `out[i]`) with the number it marked. Since the criterion is symmetric both ends of a bond
-    /// decide alike, so a force model can fuse the check into a bond loop of its own and skip
-    /// the bonds it breaks there. Then finishes as [`Damage::check`] does.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn check_with<T: Send, P: Plastic, F>(
+    /// The bond pass of a check, `visit`'s: for each particle `i`,
+    /// `visit(i, row, bond_row, breaker)` walks `i`'s own bond states `row` (1 intact, 0
+    /// broken), marks with 2 the intact bonds that [`Breaker::breaks`] says go now, and returns
+    /// what it computed for `i` (stored in `out.0[i]`) with the number it marked; `bond_row` is
+    /// `i`'s slice of the per-bond `out.1`, the visitor's own. Since the criterion is symmetric
+    /// both ends of a bond decide alike, so a force model can fuse the check into a bond loop of
+    /// its own and skip the bonds it breaks there. [`Damage::finish_check`] must follow.
+    pub(crate) fn visit_check<T: Send, B: Send, F>(
         &mut self,
         family: &Family,
-        y: &[Vec3],
         delta: f64,
-        p: P,
-        broken: &mut Vec<(u32, u32)>,
-        out: &mut [T],
+        out: (&mut [T], &mut [B]),
         visit: &F,
     ) where
-        F: Fn(usize, &mut [u8], &Breaker) -> (T, u32) + Sync,
+        F: Fn(usize, &mut [u8], &mut [B], &Breaker) -> (T, u32) + Sync,
     {
         {
             let (s_crit, alpha) = (&self.s_crit, &self.alpha);
@@ -177,23 +178,41 @@ impl Damage {
             inv_delta: 1.0 / delta,
         };
         let offsets = family.offsets();
-        for_rows_mut2(
+        let n = family.len();
+        let per_particle = (&mut self.new_count[..], out.0);
+        for_rows(
             offsets,
-            &mut self.new_count,
-            out,
-            &mut self.state,
-            &|first, counts: &mut [u32], outs: &mut [T], state: &mut [u8]| {
+            n,
+            per_particle,
+            (&mut self.state[..], out.1),
+            &|first,
+              (counts, outs): (&mut [u32], &mut [T]),
+              (state, bonds): (&mut [u8], &mut [B])| {
                 let base = offsets[first] as usize;
                 for (o, (count, slot)) in counts.iter_mut().zip(outs.iter_mut()).enumerate() {
                     let i = first + o;
-                    let r = family.range(i);
-                    let (value, c) = visit(i, &mut state[r.start - base..r.end - base], &brk);
+                    let r = r_of(family, i, base);
+                    let (value, c) = visit(i, &mut state[r.clone()], &mut bonds[r], &brk);
                     *slot = value;
                     *count = c;
                 }
             },
         );
-        let inv_delta = brk.inv_delta;
+    }
+
+    /// Ends a check after [`Damage::visit_check`]: the bonds marked 2 become broken (0), their
+    /// pairs `(i, j)`, `i < j`, are appended to `broken` in increasing order, and the overshoot
+    /// is measured at positions `y` (m) with the plastic extensions `p` the check used (the
+    /// marked bonds' own: a visitor changes no broken bond's).
+    pub(crate) fn finish_check<P: Plastic>(
+        &mut self,
+        family: &Family,
+        y: &[Vec3],
+        delta: f64,
+        p: P,
+        broken: &mut Vec<(u32, u32)>,
+    ) {
+        let inv_delta = 1.0 / delta;
         self.overshoot = 0.0;
         for i in 0..family.len() {
             if self.new_count[i] == 0 {
@@ -224,6 +243,12 @@ impl Damage {
     pub fn last_overshoot(&self) -> f64 {
         self.overshoot
     }
+}
+
+/// Particle `i`'s bonds as indices into a block's slice that starts at bond `base`.
+fn r_of(family: &Family, i: usize, base: usize) -> std::ops::Range<usize> {
+    let r = family.range(i);
+    r.start - base..r.end - base
 }
 
 /// The breaking criterion of one check: thresholds per particle and `1 / delta`.

@@ -47,53 +47,54 @@ pub(crate) fn for_rows_mut<P: Send, B: Send, F>(
 ) where
     F: Fn(usize, &mut [P], &mut [B]) + Sync,
 {
-    // Zero-sized: the second slice costs nothing.
-    let mut none = vec![(); per_particle.len()];
-    split_rows2(
-        offsets,
-        0,
-        per_particle,
-        &mut none,
-        per_bond,
-        &|first, p, _, b| f(first, p, b),
-    );
-}
-
-/// As [`for_rows_mut`] with two per-particle slices, split alike.
-pub(crate) fn for_rows_mut2<P: Send, Q: Send, B: Send, F>(
-    offsets: &[u32],
-    per_particle: &mut [P],
-    also: &mut [Q],
-    per_bond: &mut [B],
-    f: &F,
-) where
-    F: Fn(usize, &mut [P], &mut [Q], &mut [B]) + Sync,
-{
-    split_rows2(offsets, 0, per_particle, also, per_bond, f);
-}
-
-fn split_rows2<P: Send, Q: Send, B: Send, F>(
-    offsets: &[u32],
-    first: usize,
-    per_particle: &mut [P],
-    also: &mut [Q],
-    per_bond: &mut [B],
-    f: &F,
-) where
-    F: Fn(usize, &mut [P], &mut [Q], &mut [B]) + Sync,
-{
     let n = per_particle.len();
+    split_rows(offsets, 0, n, per_particle, per_bond, f);
+}
+
+/// As [`for_rows_mut`] with any [`Rows`] per particle and per bond (a slice, or a pair of
+/// them, split alike), over the `n` particles.
+pub(crate) fn for_rows<P: Rows, B: Rows, F>(offsets: &[u32], n: usize, p: P, b: B, f: &F)
+where
+    F: Fn(usize, P, B) + Sync,
+{
+    split_rows(offsets, 0, n, p, b, f);
+}
+
+/// Per-particle or per-bond outputs that split into disjoint halves.
+pub(crate) trait Rows: Send + Sized {
+    /// The first `at` entries and the rest.
+    fn split(self, at: usize) -> (Self, Self);
+}
+
+impl<T: Send> Rows for &mut [T] {
+    fn split(self, at: usize) -> (Self, Self) {
+        self.split_at_mut(at)
+    }
+}
+
+impl<A: Rows, B: Rows> Rows for (A, B) {
+    fn split(self, at: usize) -> (Self, Self) {
+        let (al, ar) = self.0.split(at);
+        let (bl, br) = self.1.split(at);
+        ((al, bl), (ar, br))
+    }
+}
+
+/// Halves the `n` particles from `first` (and their bonds with them) until a block is at most
+/// [`GRAIN`].
+fn split_rows<P: Rows, B: Rows, F>(offsets: &[u32], first: usize, n: usize, p: P, b: B, f: &F)
+where
+    F: Fn(usize, P, B) + Sync,
+{
     if n <= GRAIN {
-        f(first, per_particle, also, per_bond);
+        f(first, p, b);
         return;
     }
     let mid = n / 2;
-    let (pl, pr) = per_particle.split_at_mut(mid);
-    let (ql, qr) = also.split_at_mut(mid);
-    let split = (offsets[first + mid] - offsets[first]) as usize;
-    let (bl, br) = per_bond.split_at_mut(split);
+    let (pl, pr) = p.split(mid);
+    let (bl, br) = b.split((offsets[first + mid] - offsets[first]) as usize);
     rayon::join(
-        || split_rows2(offsets, first, pl, ql, bl, f),
-        || split_rows2(offsets, first + mid, pr, qr, br, f),
+        || split_rows(offsets, first, mid, pl, bl, f),
+        || split_rows(offsets, first + mid, n - mid, pr, br, f),
     );
 }

@@ -164,20 +164,39 @@ fn larger_alpha_breaks_fewer_bonds_in_the_same_impact() {
 }
 
 /// The explicit step's fused damage check and dilatation pass give, bit for bit, what the check
-/// followed by the force evaluation gives: the same broken pairs, bond states and forces, over
-/// successive stretches that break more bonds each time (alpha > 0, so thresholds differ from
-/// particle to particle), isotropic and anisotropic, with and without the pressure term.
+/// followed by the force evaluation gives: the same broken pairs, bond states and forces (and
+/// plastic extensions), over successive stretches that break more bonds each time (alpha > 0,
+/// so thresholds differ from particle to particle), isotropic and anisotropic, with and without
+/// the pressure term, elastic and ductile (bonds yielding at every stage, the check reading the
+/// plastic extensions of the stage before).
 #[test]
 fn fused_check_and_forces_match_check_then_forces_bit_for_bit() {
-    use perifrac_physics::{ChenOptions, ForceModel};
+    use perifrac_physics::{ChenOptions, ForceModel, YieldParams};
     let (disc, _, _) = block([0.06, 0.03, 0.03], [6, 3, 3], 1.5);
     let x = disc.rest_positions().to_vec();
+    let anisotropy = Some([[2.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
     let mut aniso = brittle(2e-3, 2.0);
-    aniso.anisotropy = Some([[2.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
+    aniso.anisotropy = anisotropy;
+    // a yield strain of 5e-4 (a fifth of s_crit): bonds yield from the second stage on
+    let ductile = |anisotropy| {
+        let mut m = brittle(2e-3, 2.0);
+        m.anisotropy = anisotropy;
+        let b = 15.0 * m.shear_modulus / (2.0 * std::f64::consts::PI * disc.horizon().powi(5));
+        let a_y = 2.0 * disc.horizon() * b * 5e-4;
+        m.plasticity = Some(YieldParams {
+            psi0: 0.5 * a_y * a_y,
+            gamma_ratio: 0.2,
+            from_strain: true,
+        });
+        m
+    };
     for (material, energy_consistent) in [
         (brittle(2e-3, 2.0), true),
         (brittle(2e-3, 2.0), false),
         (aniso, true),
+        (ductile(None), true),
+        (ductile(None), false),
+        (ductile(anisotropy), true),
     ] {
         let options = ChenOptions {
             energy_consistent,
@@ -207,6 +226,18 @@ fn fused_check_and_forces_match_check_then_forces_bit_for_bit() {
             let (da, db) = (fused.damage().unwrap(), apart.damage().unwrap());
             assert_eq!(da.bond_state(), db.bond_state());
             assert_eq!(fused.break_overshoot(), apart.break_overshoot());
+            let plastic = |m: &ChenModel| {
+                m.plastic_extensions()
+                    .map(|e| e.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+            };
+            assert_eq!(plastic(&fused), plastic(&apart), "stretch {stretch}");
+            if let (Some(ep), true) = (fused.plastic_extensions(), stretch > 0.0) {
+                // the ductile runs do yield (else they show little)
+                assert!(
+                    ep.iter().any(|&e| e != 0.0),
+                    "stretch {stretch}: none yielded"
+                );
+            }
             if stretch == 1.6e-2 {
                 // The last stage has broken some bonds but not all (else the test shows little).
                 let intact = da.intact_bonds();
@@ -239,14 +270,17 @@ fn ductile_check_matches_the_criterion_bond_by_bond() {
         // deterministic extensions in [-2, 1] s_crit delta: about a sixth of them past
         // -s_crit delta, so those bonds break at any positive extension
         let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        for ep in m.plastic_extension_mut().unwrap() {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            *ep = (3.0 * u - 2.0) * s_crit * delta;
-        }
-        let ep = m.plastic_extension().unwrap().to_vec();
+        let ep: Vec<f64> = (0..fam.num_bonds())
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+                (3.0 * u - 2.0) * s_crit * delta
+            })
+            .collect();
+        m.set_plastic_extensions(&ep).unwrap();
+        assert_eq!(m.plastic_extensions().unwrap(), ep);
         let rev = fam.reverse_index();
         let y: Vec<_> = x
             .iter()

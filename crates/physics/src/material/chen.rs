@@ -6,8 +6,9 @@ use super::fit::{
     anisotropic_target, dilatation_weights, fit_tensors, Correction, Spread, ISOTROPIC_TARGET,
 };
 use super::kernel::{
-    dilatation, dilatation_breaking, energy_density, force, return_map, AllAlive, Fitted, Inputs,
-    Isotropic, Mask, NoPlastic, PerBond, WithPlastic,
+    dilatation, dilatation_breaking, dilatation_yield, dilatation_yield_breaking, energy_density,
+    force, force_yield, with_row_buffer, AllAlive, Fitted, Inputs, Isotropic, Mask, NoPlastic,
+    PerBond, Plastic, WithPlastic, Yield,
 };
 use super::same_features;
 use super::{ChenMaterial, ForceModel};
@@ -91,7 +92,7 @@ struct Setup {
     /// Per-bond fitted dilatation weights `(d_ij, d_ji)` (each over its own particle's `c`),
     /// in bond order, when the dilatation is fitted.
     dil_weights: Option<Vec<[f64; 2]>>,
-    /// Reverse-bond index, when plastic or anisotropic.
+    /// Reverse-bond index, when anisotropic.
     reverse: Option<Vec<u32>>,
     /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
     yield_params: Option<Vec<(f64, f64)>>,
@@ -102,8 +103,16 @@ struct Setup {
 #[derive(Debug, Clone)]
 pub struct ChenModel {
     setup: Setup,
-    /// Plastic extension per directed bond (m), only when plastic.
-    ep: Option<Vec<f64>>,
+    /// Plastic extensions `(ep_ij, ep_ji)` per directed bond `i -> j` (m), only when plastic:
+    /// each bond's own and its reverse's, so the bond loops stream them instead of gathering
+    /// the reverse's (`ep[k][1] == ep[rev k][0]` always, bit for bit).
+    ep: Option<Vec<[f64; 2]>>,
+    /// A lower bound on every plastic extension (m, at most 0): the least ever stored, which
+    /// lets the damage check pass over bonds far from breaking without loading theirs.
+    ep_floor: f64,
+    /// Per particle `[theta_i, S_i, least extension changed]` of a plastic step's first pass,
+    /// only when plastic.
+    first_pass: Vec<[f64; 3]>,
     damage: Option<Damage>,
     /// Per particle `(theta_i, S_i)` from the last dilatation pass.
     ts: Vec<[f64; 2]>,
@@ -122,6 +131,11 @@ fn family_moments(disc: &Discretization, w: Option<&[f64]>, i: usize) -> (f64, f
         let wv = wk * disc.volumes()[fam.neighbours()[k] as usize];
         (m1 + wv * r, m2 + wv * r * r)
     })
+}
+
+/// `ep[k] = (own[k], own[rev k])` for every directed bond `k`.
+fn fill_pairs(fam: &crate::family::Family, own: &[f64], ep: &mut [[f64; 2]]) {
+    fam.for_each_reverse(|k, r| ep[k] = [own[k], own[r]]);
 }
 
 /// Binds `$w` (weights) and `$d` (damage mask) to concrete view types and expands `$body` once
@@ -171,14 +185,23 @@ macro_rules! with_wpd {
                 with_wd!($setup, $damage, |$w, $d| $body)
             }
             Some(ep) => {
-                let $p = WithPlastic {
-                    ep,
-                    rev: $setup.reverse.as_deref().expect("reverse index"),
-                };
+                let $p = WithPlastic { ep };
                 with_wd!($setup, $damage, |$w, $d| $body)
             }
         }
     };
+}
+
+impl Setup {
+    /// The bond loops' read-only inputs at positions `y` (m).
+    fn inputs<'a>(&'a self, y: &'a [Vec3]) -> Inputs<'a> {
+        Inputs {
+            family: self.disc.family(),
+            y,
+            volumes: self.disc.volumes(),
+            c_theta: &self.c_theta,
+        }
+    }
 }
 
 impl ChenModel {
@@ -240,7 +263,7 @@ impl ChenModel {
         let mass = (0..n).map(|i| density[i] * disc.volumes()[i]).collect();
         let plastic = materials.iter().any(|m| m.plasticity.is_some());
         let fractures = materials.iter().any(ChenMaterial::fractures);
-        let reverse = (anisotropic || plastic).then(|| fam.reverse_index());
+        let reverse = anisotropic.then(|| fam.reverse_index());
         // d_ij / c_i, so that theta_i = c_i sum_j (d_ij / c_i) e_ij V_j keeps the kernel's form
         // (omega_ij times the fit's factor on the scalar calibration, bounded by FIT_BOUND)
         let dil_weights = options.fitted_dilatation.then(|| {
@@ -306,7 +329,12 @@ impl ChenModel {
                 .collect();
             Damage::new(fam, s_crit, alpha)
         });
-        let ep = plastic.then(|| vec![0.0; fam.num_bonds()]);
+        let ep = plastic.then(|| vec![[0.0; 2]; fam.num_bonds()]);
+        let first_pass = if plastic {
+            vec![[0.0; 3]; n]
+        } else {
+            Vec::new()
+        };
         Ok(ChenModel {
             setup: Setup {
                 c_theta,
@@ -322,6 +350,8 @@ impl ChenModel {
                 disc,
             },
             ep,
+            ep_floor: 0.0,
+            first_pass,
             damage,
             ts: vec![[0.0; 2]; n],
             pq: vec![[0.0; 2]; n],
@@ -345,14 +375,38 @@ impl ChenModel {
         self.setup.options
     }
 
-    /// Plastic extension per directed bond (m), when some material is plastic.
-    pub fn plastic_extension(&self) -> Option<&[f64]> {
+    /// Plastic extension `ep_ij` of each directed bond `i -> j` in bond order (m; a copy), when
+    /// some material is plastic.
+    pub fn plastic_extensions(&self) -> Option<Vec<f64>> {
+        self.ep.as_ref().map(|ep| ep.iter().map(|p| p[0]).collect())
+    }
+
+    /// The stored pairs `(ep_ij, ep_ji)` of each directed bond `i -> j` in bond order (m), when
+    /// some material is plastic: each bond's own plastic extension and its reverse's.
+    pub fn plastic_extension_pairs(&self) -> Option<&[[f64; 2]]> {
         self.ep.as_deref()
     }
 
-    /// Mutable plastic extensions (m), e.g. to restore a checkpoint.
-    pub fn plastic_extension_mut(&mut self) -> Option<&mut [f64]> {
-        self.ep.as_deref_mut()
+    /// Sets the plastic extension of every directed bond (m, in bond order), both ends of each
+    /// bond's stored pair. Errors when the model is not plastic or `own` is not one value a
+    /// bond.
+    pub fn set_plastic_extensions(&mut self, own: &[f64]) -> Result<(), PhysicsError> {
+        let fam = self.setup.disc.family();
+        let Some(ep) = self.ep.as_mut() else {
+            return Err(PhysicsError::BadSetting(
+                "plastic extensions given to a model with no plastic material".into(),
+            ));
+        };
+        if own.len() != ep.len() {
+            return Err(PhysicsError::LengthMismatch {
+                what: "plastic extensions (one per directed bond)",
+                expected: ep.len(),
+                got: own.len(),
+            });
+        }
+        fill_pairs(fam, own, ep);
+        self.ep_floor = WithPlastic { ep }.floor();
+        Ok(())
     }
 
     /// Damage state, when some material fractures.
@@ -413,43 +467,56 @@ impl ChenModel {
             .collect()
     }
 
-    /// Recomputes `theta` at `y` (and runs the return map when `advance`), then `pq`.
-    fn dilatation_pass(&mut self, y: &[Vec3], advance: bool) {
+    /// Recomputes `theta` at `y` with the plastic extensions as they are, then `pq`.
+    fn dilatation_pass(&mut self, y: &[Vec3]) {
         let s = &self.setup;
-        let inp = Inputs {
-            family: s.disc.family(),
-            y,
-            volumes: s.disc.volumes(),
-            c_theta: &s.c_theta,
-        };
-        let moment = s.options.energy_consistent;
-        match (self.ep.as_deref_mut(), &s.yield_params, advance) {
-            (Some(ep), Some(yp), true) => {
-                let offsets = inp.family.offsets();
-                with_wd!(s, self.damage.as_ref(), |w, d| {
-                    let body = |first: usize, ts: &mut [[f64; 2]], ep: &mut [f64]| {
-                        let base = offsets[first] as usize;
-                        for (o, t) in ts.iter_mut().enumerate() {
-                            let i = first + o;
-                            let r = inp.family.range(i);
-                            let (theta, _) = dilatation::<_, _, _, false>(inp, w, NoPlastic, d, i);
-                            let (psi0, gr) = yp[i];
-                            let own = &mut ep[r.start - base..r.end - base];
-                            let b = s.coef_b[i];
-                            *t = [theta, return_map(inp, w, d, i, theta, b, psi0, gr, own)];
-                        }
-                    };
-                    for_rows_mut(offsets, &mut self.ts, ep, &body);
-                })
+        let inp = s.inputs(y);
+        with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
+            let ts = &mut self.ts;
+            if s.options.energy_consistent {
+                map_particles(ts, |i| dilatation::<_, _, _, true>(inp, w, p, d, i).into())
+            } else {
+                map_particles(ts, |i| dilatation::<_, _, _, false>(inp, w, p, d, i).into())
             }
-            _ => with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
-                let ts = &mut self.ts;
-                if moment {
-                    map_particles(ts, |i| dilatation::<_, _, _, true>(inp, w, p, d, i).into())
-                } else {
-                    map_particles(ts, |i| dilatation::<_, _, _, false>(inp, w, p, d, i).into())
-                }
-            }),
+        });
+        self.pressure_pass();
+    }
+
+    /// The first pass of a plastic step: `theta` at `y`, the return map of each bond's own end
+    /// and `S` (into `ts`), then `pq`. The other ends' return map is [`Self::force_yield_pass`]'s.
+    fn yield_pass(&mut self, y: &[Vec3]) {
+        let s = &self.setup;
+        let (Some(ep), Some(params)) = (self.ep.as_deref_mut(), s.yield_params.as_deref()) else {
+            return;
+        };
+        let inp = s.inputs(y);
+        let yp = Yield {
+            coef_b: &s.coef_b,
+            params,
+        };
+        let offsets = inp.family.offsets();
+        with_wd!(s, self.damage.as_ref(), |w, d| {
+            let body = |first: usize, out: &mut [[f64; 3]], ep: &mut [[f64; 2]]| {
+                let base = offsets[first] as usize;
+                with_row_buffer(|buf| {
+                    for (o, t) in out.iter_mut().enumerate() {
+                        let i = first + o;
+                        let r = inp.family.range(i);
+                        let own = &mut ep[r.start - base..r.end - base];
+                        *t = dilatation_yield(inp, w, d, yp, i, own, buf);
+                    }
+                })
+            };
+            for_rows_mut(offsets, &mut self.first_pass, ep, &body);
+        });
+        self.finish_first_pass();
+    }
+
+    /// `ts` and the floor from the first pass of a plastic step, then `pq`.
+    fn finish_first_pass(&mut self) {
+        for (t, &[theta, moment, least]) in self.ts.iter_mut().zip(&self.first_pass) {
+            *t = [theta, moment];
+            self.ep_floor = self.ep_floor.min(least);
         }
         self.pressure_pass();
     }
@@ -478,43 +545,96 @@ impl ChenModel {
         let Some(damage) = self.damage.as_mut() else {
             return;
         };
-        let inp = Inputs {
-            family: s.disc.family(),
-            y,
-            volumes: s.disc.volumes(),
-            c_theta: &s.c_theta,
-        };
+        let inp = s.inputs(y);
         let delta = s.disc.horizon();
         let ts = &mut self.ts;
+        // zero-sized: no storage
+        let none = &mut vec![(); inp.family.num_bonds()][..];
         with_wd!(@w s, w, {
             if s.options.energy_consistent {
-                damage.check_with(inp.family, y, delta, NoPlastic, broken, ts, &|i, row, brk| {
+                damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
                     let ((theta, m), c) = dilatation_breaking::<_, true>(inp, w, brk, i, row);
                     ([theta, m], c)
                 })
             } else {
-                damage.check_with(inp.family, y, delta, NoPlastic, broken, ts, &|i, row, brk| {
+                damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
                     let ((theta, m), c) = dilatation_breaking::<_, false>(inp, w, brk, i, row);
                     ([theta, m], c)
                 })
             }
         });
+        damage.finish_check(inp.family, y, delta, NoPlastic, broken);
         self.pressure_pass();
+    }
+
+    /// The damage check and the first pass of a plastic step ([`Self::yield_pass`]) in one walk
+    /// over the bonds: the check reads the plastic extensions of the last step, as
+    /// [`ForceModel::break_bonds`] before the step would, and the return map skips the bonds it
+    /// broke. The same results, bit for bit.
+    fn break_and_yield(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        let s = &self.setup;
+        let (Some(damage), Some(ep), Some(params)) = (
+            self.damage.as_mut(),
+            self.ep.as_deref_mut(),
+            s.yield_params.as_deref(),
+        ) else {
+            return;
+        };
+        let inp = s.inputs(y);
+        let yp = Yield {
+            coef_b: &s.coef_b,
+            params,
+        };
+        let delta = s.disc.horizon();
+        let floor = self.ep_floor;
+        let out = (&mut self.first_pass[..], &mut ep[..]);
+        with_wd!(@w s, w, {
+            damage.visit_check(inp.family, delta, out, &|i, row, own, brk| {
+                with_row_buffer(|buf| {
+                    dilatation_yield_breaking(inp, w, brk, floor, yp, i, row, own, buf)
+                })
+            })
+        });
+        damage.finish_check(inp.family, y, delta, WithPlastic { ep }, broken);
+        self.finish_first_pass();
     }
 
     /// Force pass: `forces[i]` (N) from the current `pq`.
     fn force_pass(&self, y: &[Vec3], forces: &mut [Vec3]) {
         let s = &self.setup;
-        let inp = Inputs {
-            family: s.disc.family(),
-            y,
-            volumes: s.disc.volumes(),
-            c_theta: &s.c_theta,
-        };
+        let inp = s.inputs(y);
         let (pq, b) = (&self.pq, &s.coef_b);
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             map_particles(forces, |i| force(inp, w, p, d, pq, b, i))
         })
+    }
+
+    /// Force pass of a plastic step after [`Self::yield_pass`]: the return map of each bond's
+    /// other end, then `forces[i]` (N) with the new extensions.
+    fn force_yield_pass(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        let s = &self.setup;
+        let (Some(ep), Some(params)) = (self.ep.as_deref_mut(), s.yield_params.as_deref()) else {
+            return;
+        };
+        let inp = s.inputs(y);
+        let yp = Yield {
+            coef_b: &s.coef_b,
+            params,
+        };
+        let (pq, ts) = (&self.pq, &self.ts);
+        let offsets = inp.family.offsets();
+        with_wd!(s, self.damage.as_ref(), |w, d| {
+            let body = |first: usize, f: &mut [Vec3], ep: &mut [[f64; 2]]| {
+                let base = offsets[first] as usize;
+                for (o, slot) in f.iter_mut().enumerate() {
+                    let i = first + o;
+                    let r = inp.family.range(i);
+                    let own = &mut ep[r.start - base..r.end - base];
+                    *slot = force_yield(inp, w, d, pq, yp, ts, i, own);
+                }
+            };
+            for_rows_mut(offsets, forces, ep, &body);
+        });
     }
 
     #[track_caller]
@@ -533,7 +653,9 @@ impl ForceModel for ChenModel {
         w.array(&self.ts);
         w.bool(self.ep.is_some());
         if let Some(ep) = &self.ep {
-            w.array(ep);
+            // each bond's own extension, as before the pairs: the reverse's follows from it
+            let own: Vec<f64> = ep.iter().map(|p| p[0]).collect();
+            w.array(&own);
         }
         w.bool(self.damage.is_some());
         if let Some(d) = &self.damage {
@@ -546,7 +668,10 @@ impl ForceModel for ChenModel {
         r.array_into("dilatations", &mut self.ts)?;
         same_features("plastic extension", self.ep.is_some(), r.bool("plastic")?)?;
         if let Some(ep) = &mut self.ep {
-            r.array_into("plastic extensions", ep)?;
+            let mut own = vec![0.0; ep.len()];
+            r.array_into("plastic extensions", &mut own)?;
+            fill_pairs(self.setup.disc.family(), &own, ep);
+            self.ep_floor = WithPlastic { ep }.floor();
         }
         same_features("damage", self.damage.is_some(), r.bool("fracture")?)?;
         if let Some(d) = &mut self.damage {
@@ -565,8 +690,13 @@ impl ForceModel for ChenModel {
 
     fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
         self.check_len(y, Some(forces));
-        self.dilatation_pass(y, true);
-        self.force_pass(y, forces);
+        if self.ep.is_some() {
+            self.yield_pass(y);
+            self.force_yield_pass(y, forces);
+        } else {
+            self.dilatation_pass(y);
+            self.force_pass(y, forces);
+        }
     }
 
     fn break_bonds_and_update_forces(
@@ -575,32 +705,31 @@ impl ForceModel for ChenModel {
         broken: &mut Vec<(u32, u32)>,
         forces: &mut [Vec3],
     ) {
-        if self.damage.is_none() || self.ep.is_some() {
-            self.break_bonds(y, broken);
+        if self.damage.is_none() {
             self.update_forces(y, forces);
             return;
         }
         self.check_len(y, Some(forces));
-        self.break_and_dilate(y, broken);
-        self.force_pass(y, forces);
+        if self.ep.is_some() {
+            self.break_and_yield(y, broken);
+            self.force_yield_pass(y, forces);
+        } else {
+            self.break_and_dilate(y, broken);
+            self.force_pass(y, forces);
+        }
     }
 
     fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
         self.check_len(y, Some(forces));
-        self.dilatation_pass(y, false);
+        self.dilatation_pass(y);
         self.force_pass(y, forces);
     }
 
     fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
         self.check_len(y, None);
-        self.dilatation_pass(y, false);
+        self.dilatation_pass(y);
         let s = &self.setup;
-        let inp = Inputs {
-            family: s.disc.family(),
-            y,
-            volumes: s.disc.volumes(),
-            c_theta: &s.c_theta,
-        };
+        let inp = s.inputs(y);
         let ts = &self.ts;
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             map_particles(&mut self.scratch, |i| {
@@ -618,10 +747,10 @@ impl ForceModel for ChenModel {
         let s = &self.setup;
         let delta = s.disc.horizon();
         match self.ep.as_deref() {
-            None => damage.check(s.disc.family(), y, delta, NoPlastic, broken),
+            None => damage.check(s.disc.family(), y, delta, (NoPlastic, 0.0), broken),
             Some(ep) => {
-                let rev = s.reverse.as_deref().expect("reverse index");
-                damage.check(s.disc.family(), y, delta, WithPlastic { ep, rev }, broken)
+                let p = (WithPlastic { ep }, self.ep_floor);
+                damage.check(s.disc.family(), y, delta, p, broken)
             }
         }
     }
@@ -668,6 +797,8 @@ impl ForceModel for ChenModel {
         let ChenModel {
             setup,
             ep,
+            ep_floor: _,
+            first_pass,
             damage,
             ts,
             pq,
@@ -692,7 +823,8 @@ impl ForceModel for ChenModel {
             + dil_weights.as_ref().map_or(0, |w| 16 * w.len())
             + reverse.as_ref().map_or(0, |r| 4 * r.len())
             + yield_params.as_ref().map_or(0, |y| 16 * y.len())
-            + ep.as_ref().map_or(0, |e| 8 * e.len())
+            + ep.as_ref().map_or(0, |e| 16 * e.len())
+            + 24 * first_pass.len()
             + damage.as_ref().map_or(0, Damage::memory_bytes)
             + 8 * scratch.len()
             + 16 * (pq.len() + ts.len())

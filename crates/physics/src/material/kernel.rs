@@ -1,6 +1,8 @@
 //! The Chen bond loops, generic over the bond weight, the plastic extension and the damage mask.
 //! Each variant is monomorphised, so the elastic loop carries no plastic or fracture branch.
 
+use std::cell::RefCell;
+
 use crate::family::Family;
 use crate::fracture::Breaker;
 use crate::math::{norm, sub, Vec3};
@@ -93,31 +95,35 @@ impl Plastic for NoPlastic {
     }
 }
 
-/// Stored plastic extensions with the reverse-bond index.
+/// Stored plastic extensions in pairs: `ep[k] = (ep_ij, ep_ji)` in bond order, both ends of
+/// every bond kept by the return map alike, so the loops stream them and gather nothing.
 #[derive(Clone, Copy)]
 pub(crate) struct WithPlastic<'a> {
-    pub ep: &'a [f64],
-    pub rev: &'a [u32],
+    pub ep: &'a [[f64; 2]],
 }
 
 impl Plastic for WithPlastic<'_> {
     #[inline(always)]
     fn pair(&self, k: usize) -> (f64, f64) {
-        (self.ep[k], self.ep[self.rev[k] as usize])
+        let [ij, ji] = self.ep[k];
+        (ij, ji)
     }
 
-    /// The least plastic extension and 0: one serial pass over the bonds' 8 bytes.
+    /// The least plastic extension and 0: one serial pass over the bonds' 16 bytes.
     fn floor(&self) -> f64 {
-        // Eight running minima: a single one chains every comparison on the last.
+        // Eight running minima: a single one chains every comparison on the last. Each own
+        // extension is also its reverse bond's second, so the first of each pair suffices.
         let mut lanes = [0.0f64; 8];
         let chunks = self.ep.chunks_exact(8);
         let rest = chunks.remainder();
         for c in chunks {
-            for (l, &e) in lanes.iter_mut().zip(c) {
-                *l = if e < *l { e } else { *l };
+            for (l, e) in lanes.iter_mut().zip(c) {
+                *l = if e[0] < *l { e[0] } else { *l };
             }
         }
-        let mut least = rest.iter().fold(0.0f64, |a, &e| if e < a { e } else { a });
+        let mut least = rest
+            .iter()
+            .fold(0.0f64, |a, e| if e[0] < a { e[0] } else { a });
         for l in lanes {
             least = if l < least { l } else { least };
         }
@@ -248,42 +254,197 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
     ((theta, u - theta * m / 3.0), count)
 }
 
-/// Return map of particle `i`'s own bonds (MODEL.md, Plasticity): `ep` is this particle's slice.
-/// Returns the deviatoric moment `S_i` with the updated plastic extensions.
-#[allow(clippy::too_many_arguments)]
+/// Per-particle constants of the return map: `b_j` and `(Psi0_j, gamma_ratio_j)`.
+#[derive(Clone, Copy)]
+pub(crate) struct Yield<'a> {
+    pub coef_b: &'a [f64],
+    pub params: &'a [(f64, f64)],
+}
+
+impl Yield<'_> {
+    /// The return map (MODEL.md, Plasticity) of particle `i`'s end of a bond: weight `w`,
+    /// rest length `r` (m), extension `e` (m), plastic extension `ep` (m), `i`'s dilatation
+    /// `theta`. Returns `(ed, ep_new)`. Both ends of a bond run this with the same bits wherever
+    /// it is called, so a bond's two stored pairs stay mirror images.
+    #[inline(always)]
+    fn map(&self, i: usize, w: f64, theta: f64, e: f64, r: f64, ep: f64) -> (f64, f64) {
+        let (psi0, gamma_ratio) = self.params[i];
+        let four_wb = 4.0 * w * self.coef_b[i];
+        let ed = e - theta * r / 3.0;
+        let trial = four_wb * (ed - ep);
+        let new = crate::plastic::return_map_bond(trial, ep, four_wb, psi0, gamma_ratio * r);
+        (ed, new)
+    }
+}
+
+/// `*slot = new` only where the bits differ (returns whether it stored): most bonds do not
+/// yield in a step, and a line of the pairs left clean is not written back to memory.
 #[inline(always)]
-pub(crate) fn return_map<W: Weights, D: Alive>(
+fn store_changed(slot: &mut f64, new: f64) -> bool {
+    let changed = slot.to_bits() != new.to_bits();
+    if changed {
+        *slot = new;
+    }
+    changed
+}
+
+/// Extensions a walk keeps for its second loop over a particle's bonds; longer rows compute
+/// the rest again (the same bits).
+pub(crate) const ROW_BUFFER: usize = 512;
+
+/// A row's `(e_ij, omega_ij)` kept between the loops of a walk.
+pub(crate) type RowBuffer = [[f64; 2]; ROW_BUFFER];
+
+thread_local! {
+    /// Each worker's row buffer (8 KiB, never on the heap).
+    static ROW: RefCell<RowBuffer> = const { RefCell::new([[0.0; 2]; ROW_BUFFER]) };
+}
+
+/// Runs `f` with this thread's row buffer (whose contents are left from the last use).
+#[inline(always)]
+pub(crate) fn with_row_buffer<T>(f: impl FnOnce(&mut RowBuffer) -> T) -> T {
+    ROW.with(|b| f(&mut b.borrow_mut()))
+}
+
+/// The first pass of a plastic step for particle `i`: `theta_i` over the intact bonds, then the
+/// return map of `i`'s own end of each (`ep` is `i`'s slice of the pairs: the first of each is
+/// updated; the second, the other end's, is the force pass's to update) and the deviatoric
+/// moment `S_i` with the new extensions. `buf` keeps the first loop's extensions. Returns
+/// `[theta_i, S_i, least]`, `least` the least of 0 and the extensions it changed (m).
+#[inline(always)]
+pub(crate) fn dilatation_yield<W: Weights, D: Alive>(
     inp: Inputs,
     w: W,
     d: D,
+    yp: Yield,
     i: usize,
-    theta: f64,
-    b: f64,
-    psi0: f64,
-    gamma_ratio: f64,
-    ep: &mut [f64],
-) -> f64 {
+    ep: &mut [[f64; 2]],
+    buf: &mut RowBuffer,
+) -> [f64; 3] {
     let fam = inp.family;
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
     let range = fam.range(i);
     let first = range.start;
     let yi = inp.y[i];
-    let mut moment = 0.0;
+    let mut acc = 0.0;
     for k in range {
         if !d.alive(k) {
             continue;
         }
+        let j = nb[k] as usize;
+        let r = rl[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        let wij = w.pair(k, r).0;
+        if let Some(b) = buf.get_mut(k - first) {
+            *b = [e, wij];
+        }
+        acc += dilatation_term(w, wij, k, r, inp.volumes[j], e);
+    }
+    let theta = inp.c_theta[i] * acc;
+    let (moment, least) = own_return_map(inp, w, |k| d.alive(k), yp, i, theta, ep, buf);
+    [theta, moment, least]
+}
+
+/// [`dilatation_yield`] fused with the damage check: `row` is `i`'s own bond states (1 intact),
+/// the bonds `brk` breaks at `inp.y` with the pairs `ep` as they were (whose least value is
+/// `floor`) are marked 2 and left out, exactly as a check before [`dilatation_yield`] would.
+/// Returns what [`dilatation_yield`] does and the number of bonds it marked.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn dilatation_yield_breaking<W: Weights>(
+    inp: Inputs,
+    w: W,
+    brk: &Breaker,
+    floor: f64,
+    yp: Yield,
+    i: usize,
+    row: &mut [u8],
+    ep: &mut [[f64; 2]],
+    buf: &mut RowBuffer,
+) -> ([f64; 3], u32) {
+    let fam = inp.family;
+    let nb = fam.neighbours();
+    let rl = fam.rest_lengths();
+    let range = fam.range(i);
+    let first = range.start;
+    let yi = inp.y[i];
+    let mut acc = 0.0;
+    let mut count = 0;
+    for k in range {
+        let state = &mut row[k - first];
+        if *state != 1 {
+            continue;
+        }
+        let j = nb[k] as usize;
+        let r = rl[k];
+        let e = norm(sub(inp.y[j], yi)) - r;
+        let [epij, epji] = ep[k - first];
+        if brk.near(e - floor) && brk.breaks(i, j, e, (epij, epji)) {
+            *state = 2;
+            count += 1;
+            continue;
+        }
+        let wij = w.pair(k, r).0;
+        if let Some(b) = buf.get_mut(k - first) {
+            *b = [e, wij];
+        }
+        acc += dilatation_term(w, wij, k, r, inp.volumes[j], e);
+    }
+    let theta = inp.c_theta[i] * acc;
+    let alive = |k: usize| row[k - first] == 1;
+    let (moment, least) = own_return_map(inp, w, alive, yp, i, theta, ep, buf);
+    ([theta, moment, least], count)
+}
+
+/// Bond `k`'s term of `theta_i / c_i` as [`dilatation`] sums it, `wij` its deviatoric weight.
+#[inline(always)]
+fn dilatation_term<W: Weights>(w: W, wij: f64, k: usize, r: f64, vj: f64, e: f64) -> f64 {
+    if W::SPLIT {
+        w.dil_pair(k, r).0 * vj * e
+    } else {
+        wij * vj * e
+    }
+}
+
+/// The second loop of [`dilatation_yield`]: the return map of `i`'s own end of its bonds that
+/// `alive` keeps; returns `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j` after it and the
+/// least of 0 and the extensions it changed (m).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn own_return_map<W: Weights>(
+    inp: Inputs,
+    w: W,
+    alive: impl Fn(usize) -> bool,
+    yp: Yield,
+    i: usize,
+    theta: f64,
+    ep: &mut [[f64; 2]],
+    buf: &RowBuffer,
+) -> (f64, f64) {
+    let fam = inp.family;
+    let range = fam.range(i);
+    let first = range.start;
+    let yi = inp.y[i];
+    let (mut moment, mut least) = (0.0, 0.0f64);
+    for k in range {
+        if !alive(k) {
+            continue;
+        }
         let j = fam.neighbours()[k] as usize;
         let r = fam.rest_lengths()[k];
-        let e = norm(sub(inp.y[j], yi)) - r;
-        let slot = &mut ep[k - first];
-        let wij = w.pair(k, r).0;
-        let four_wb = 4.0 * wij * b;
-        let ed = e - theta * r / 3.0;
-        let trial = four_wb * (ed - *slot);
-        *slot = crate::plastic::return_map_bond(trial, *slot, four_wb, psi0, gamma_ratio * r);
-        moment += wij * r * (ed - *slot) * inp.volumes[j];
+        let [e, wij] = match buf.get(k - first) {
+            Some(&b) => b,
+            None => [norm(sub(inp.y[j], yi)) - r, w.pair(k, r).0],
+        };
+        let slot = &mut ep[k - first][0];
+        let (ed, new) = yp.map(i, wij, theta, e, r, *slot);
+        if store_changed(slot, new) {
+            least = least.min(new);
+        }
+        moment += wij * r * (ed - new) * inp.volumes[j];
     }
-    moment
+    (moment, least)
 }
 
 /// Force on particle `i` (N): `V_i sum_j 0.5 (A_ij + A_ji) n_ij V_j` over intact bonds, where
@@ -297,6 +458,45 @@ pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
     pq: &[[f64; 2]],
     coef_b: &[f64],
     i: usize,
+) -> Vec3 {
+    force_with(inp, w, d, pq, coef_b, i, |k, _, _, _, _| p.pair(k))
+}
+
+/// [`force`] of a plastic step after [`dilatation_yield`]: finishes the return map on the
+/// other end of each intact bond (`ep` is `i`'s slice of the pairs, whose second entries it
+/// updates, with the dilatations `theta` of that pass) and uses the new extensions.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn force_yield<W: Weights, D: Alive>(
+    inp: Inputs,
+    w: W,
+    d: D,
+    pq: &[[f64; 2]],
+    yp: Yield,
+    theta: &[[f64; 2]],
+    i: usize,
+    ep: &mut [[f64; 2]],
+) -> Vec3 {
+    let first = inp.family.range(i).start;
+    force_with(inp, w, d, pq, yp.coef_b, i, |k, j, wji, e, r| {
+        let slot = &mut ep[k - first];
+        let new = yp.map(j, wji, theta[j][0], e, r, slot[1]).1;
+        // the other end's own pass stored the same value, and its least with it
+        store_changed(&mut slot[1], new);
+        (slot[0], slot[1])
+    })
+}
+
+/// The force loop, with `ep_of(k, j, omega_ji, e, r)` giving bond `k`'s `(ep_ij, ep_ji)`.
+#[inline(always)]
+fn force_with<W: Weights, D: Alive>(
+    inp: Inputs,
+    w: W,
+    d: D,
+    pq: &[[f64; 2]],
+    coef_b: &[f64],
+    i: usize,
+    mut ep_of: impl FnMut(usize, usize, f64, f64, f64) -> (f64, f64),
 ) -> Vec3 {
     let fam = inp.family;
     let nb = fam.neighbours();
@@ -316,7 +516,7 @@ pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
         let l = norm(eta);
         let e = l - r;
         let (wij, wji) = w.pair(k, r);
-        let (epij, epji) = p.pair(k);
+        let (epij, epji) = ep_of(k, j, wji, e, r);
         let [pj, qj] = pq[j];
         let (aij, aji) = if W::SPLIT {
             let (dij, dji) = w.dil_pair(k, r);

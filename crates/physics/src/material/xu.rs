@@ -473,7 +473,13 @@ impl ForceModel for XuModel {
         };
         let start = broken.len();
         let s = &self.setup;
-        damage.check(s.disc.family(), y, s.disc.horizon(), NoPlastic, broken);
+        damage.check(
+            s.disc.family(),
+            y,
+            s.disc.horizon(),
+            (NoPlastic, 0.0),
+            broken,
+        );
         if broken.len() > start {
             self.normalise(Some(&broken[start..]));
         }
