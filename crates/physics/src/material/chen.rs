@@ -202,6 +202,15 @@ impl Setup {
             c_theta: &self.c_theta,
         }
     }
+
+    /// The return map's per-particle constants, when some material is plastic.
+    fn yield_view(&self) -> Option<Yield<'_>> {
+        let params = self.yield_params.as_deref()?;
+        Some(Yield {
+            coef_b: &self.coef_b,
+            params,
+        })
+    }
 }
 
 impl ChenModel {
@@ -486,14 +495,10 @@ impl ChenModel {
     /// and `S` (into `ts`), then `pq`. The other ends' return map is [`Self::force_yield_pass`]'s.
     fn yield_pass(&mut self, y: &[Vec3]) {
         let s = &self.setup;
-        let (Some(ep), Some(params)) = (self.ep.as_deref_mut(), s.yield_params.as_deref()) else {
+        let (Some(ep), Some(yp)) = (self.ep.as_deref_mut(), s.yield_view()) else {
             return;
         };
         let inp = s.inputs(y);
-        let yp = Yield {
-            coef_b: &s.coef_b,
-            params,
-        };
         let offsets = inp.family.offsets();
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, out: &mut [[f64; 3]], ep: &mut [[f64; 2]]| {
@@ -573,18 +578,12 @@ impl ChenModel {
     /// broke. The same results, bit for bit.
     fn break_and_yield(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
         let s = &self.setup;
-        let (Some(damage), Some(ep), Some(params)) = (
-            self.damage.as_mut(),
-            self.ep.as_deref_mut(),
-            s.yield_params.as_deref(),
-        ) else {
+        let (Some(damage), Some(ep), Some(yp)) =
+            (self.damage.as_mut(), self.ep.as_deref_mut(), s.yield_view())
+        else {
             return;
         };
         let inp = s.inputs(y);
-        let yp = Yield {
-            coef_b: &s.coef_b,
-            params,
-        };
         let delta = s.disc.horizon();
         let floor = self.ep_floor;
         let out = (&mut self.first_pass[..], &mut ep[..]);
@@ -613,14 +612,10 @@ impl ChenModel {
     /// other end, then `forces[i]` (N) with the new extensions.
     fn force_yield_pass(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
         let s = &self.setup;
-        let (Some(ep), Some(params)) = (self.ep.as_deref_mut(), s.yield_params.as_deref()) else {
+        let (Some(ep), Some(yp)) = (self.ep.as_deref_mut(), s.yield_view()) else {
             return;
         };
         let inp = s.inputs(y);
-        let yp = Yield {
-            coef_b: &s.coef_b,
-            params,
-        };
         let (pq, ts) = (&self.pq, &self.ts);
         let offsets = inp.family.offsets();
         with_wd!(s, self.damage.as_ref(), |w, d| {
