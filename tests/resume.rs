@@ -339,6 +339,7 @@ fn sigint_checkpoints_and_the_command_line_resumes() {
     common::ok(&["run", s, "-o", reference.to_str().unwrap(), "-q"]);
     let mut child = Command::new(env!("CARGO_BIN_EXE_perifrac"))
         .args(["run", s, "-o", dir.to_str().unwrap(), "-q"])
+        .env("PERIFRAC_CACHE", common::test_cache())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();

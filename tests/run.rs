@@ -183,19 +183,52 @@ fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
         }
     }
 
-    // A second run with the same scene and thread count writes the same bytes.
-    let again = tmp.path().join("again");
-    let mut args2 = args;
-    args2[3] = s(&again);
-    ok(&args2);
-    let (a, b) = (common::files(&out), common::files(&again));
-    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
-    for (name, bytes) in &a {
-        assert!(
-            bytes == &b[name],
-            "{} differs between two runs",
-            name.display()
-        );
+    // A second run with the same scene and thread count writes the same bytes, whether it
+    // recalls the stable step from the cache the first left, or iterates it.
+    let cache = tmp.path().join("cache");
+    let summary = |args: &[&str], cache: &Path| {
+        let out = common::perifrac_cached(args, cache);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "perifrac {args:?} failed:\n{err}");
+        err
+    };
+    let (first, again, iterated) = (
+        tmp.path().join("first"),
+        tmp.path().join("again"),
+        tmp.path().join("iterated"),
+    );
+    let with = |dir: &Path| {
+        let mut a = args.to_vec();
+        a[3] = s(dir);
+        a.into_iter().map(str::to_owned).collect::<Vec<_>>()
+    };
+    let run_in = |dir: &Path, extra: &[&str], cache: &Path| {
+        let a = with(dir);
+        let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
+        a.extend_from_slice(extra);
+        summary(&a, cache)
+    };
+    assert!(!run_in(&first, &[], &cache).contains("recalled"));
+    assert!(run_in(&again, &[], &cache).contains("recalled from the cache"));
+    let no_cache = tmp.path().join("unused");
+    assert!(!run_in(&iterated, &["--no-cache"], &no_cache).contains("recalled"));
+    assert!(
+        !no_cache.exists(),
+        "--no-cache wrote {}",
+        no_cache.display()
+    );
+    let a = common::files(&out);
+    for other in [&first, &again, &iterated] {
+        let b = common::files(other);
+        assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+        for (name, bytes) in &a {
+            assert!(
+                bytes == &b[name],
+                "{} differs between two runs ({})",
+                name.display(),
+                other.display()
+            );
+        }
     }
 }
 

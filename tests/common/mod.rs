@@ -54,8 +54,20 @@ pub fn have_program(program: &str) -> bool {
 
 /// Runs the `perifrac` binary built for these tests.
 pub fn perifrac(args: &[&str]) -> Output {
+    perifrac_cached(args, &test_cache())
+}
+
+/// The stable-step cache of the tests' runs (under the build's scratch directory, not the
+/// user's cache).
+pub fn test_cache() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("perifrac-cache")
+}
+
+/// Runs `perifrac` with its stable-step cache in `cache`.
+pub fn perifrac_cached(args: &[&str], cache: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_perifrac"))
         .args(args)
+        .env("PERIFRAC_CACHE", cache)
         .output()
         .expect("the perifrac binary runs")
 }

@@ -10,9 +10,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use perifrac_physics::EstimateMemo;
 use perifrac_scene::{
-    check_output_dir, Checkpoint, Limits, Observer, Progress, Scene, SceneError, Setup, ShellScene,
-    ShellSetup,
+    check_output_dir, Checkpoint, Limits, MemoDir, Observer, Progress, Scene, SceneError, Setup,
+    ShellScene, ShellSetup,
 };
 
 /// Arguments of `perifrac run`.
@@ -47,6 +48,11 @@ pub struct RunArgs {
     /// No progress bar, only the summary.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Neither recall nor keep the stable-step estimate in the cache directory
+    /// ($PERIFRAC_CACHE, else $XDG_CACHE_HOME/perifrac, else ~/.cache/perifrac), where a run
+    /// of a model built before finds it after two force evaluations (same bits, same output).
+    #[arg(long)]
+    pub no_cache: bool,
 }
 
 /// Most worker threads per core: more only adds switching (compute-bound work), and a typo
@@ -128,7 +134,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         allow_large: args.allow_large,
         ..Limits::for_this_machine()
     };
-    let setup = Setup::with_limits(&scene, frames, &limits).map_err(|e| match e {
+    let memo = (!args.no_cache)
+        .then(MemoDir::default_dir)
+        .flatten()
+        .map(MemoDir::new);
+    let memo_dyn = memo.as_ref().map(|m| m as &dyn EstimateMemo);
+    let setup = Setup::with_memo(&scene, frames, &limits, memo_dyn).map_err(|e| match e {
         SceneError::TooLarge { .. } => {
             anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
         }
@@ -140,7 +151,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
          (explicit stable limit {:.3e} s{}), {} frames of {} steps, {} on {threads} \
          thread(s), setup {:.2} s (mesh {:.2}, bond families {:.2}, model {:.2}, stable step \
-         {:.2})",
+         {:.2}{})",
         scene.path.display(),
         info.particles,
         info.bonds,
@@ -162,7 +173,19 @@ pub fn run(args: &RunArgs) -> Result<()> {
         info.times.families.as_secs_f64(),
         info.times.model.as_secs_f64(),
         info.times.stable_step.as_secs_f64(),
+        if info.times.stable_step_recalled {
+            ", recalled from the cache"
+        } else {
+            ""
+        },
     );
+    if let Some(failure) = memo.as_ref().and_then(MemoDir::failure) {
+        eprintln!(
+            "warning: the stable-step estimate could not be cached ({failure}); the next run \
+             estimates it again (set {} to a writable directory, or pass --no-cache)",
+            perifrac_scene::memo::CACHE_ENV
+        );
+    }
     if let Some(c) = &info.correction {
         let (d, b) = (c.dilatation, c.deviatoric);
         eprintln!(

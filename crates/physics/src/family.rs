@@ -3,6 +3,7 @@
 
 use crate::error::PhysicsError;
 use crate::math::{norm, norm_squared, sub, Vec3};
+use crate::par::for_rows;
 use rayon::prelude::*;
 
 /// Marker for "no neighbour across this face" in face adjacency tables.
@@ -42,62 +43,92 @@ impl Family {
         horizon: f64,
     ) -> Result<(Family, FamilyReport), PhysicsError> {
         let n = positions.len();
-        let rows = walk_all(positions, adjacency, horizon);
+        let (walk_off, walk_nb) = walk_all(positions, adjacency, horizon)?;
+        let row = |i: usize| &walk_nb[walk_off[i] as usize..walk_off[i + 1] as usize];
         // Symmetrise: a pair found by one walk only is added to the other row.
-        let rows_ref = &rows;
-        let mut extra: Vec<(u32, u32)> = rows
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(i, row)| {
-                row.iter().filter_map(move |&j| {
-                    let back = &rows_ref[j as usize];
-                    match back.binary_search(&(i as u32)) {
-                        Ok(_) => None,
-                        Err(_) => Some((j, i as u32)),
-                    }
+        let mut extra: Vec<(u32, u32)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                row(i).iter().enumerate().filter_map(move |(p, &j)| {
+                    let back = row(j as usize);
+                    // j is p-th nearest index of i's row: i sits about as far from the end of
+                    // j's (neighbourhoods alike, indices spatially ordered), found from there
+                    let guess = back.len().saturating_sub(p + 1);
+                    (!contains_near(back, i as u32, guess)).then_some((j, i as u32))
                 })
             })
             .collect();
         extra.par_sort_unstable();
-        let total: usize = rows.iter().map(Vec::len).sum::<usize>() + extra.len();
+        let total = walk_nb.len() + extra.len();
         if total > u32::MAX as usize {
             return Err(PhysicsError::TooManyBonds(total));
         }
         if total == 0 && n > 0 {
             return Err(PhysicsError::HorizonTooSmall { horizon });
         }
-        let mut offsets = Vec::with_capacity(n + 1);
-        let mut neighbours = Vec::with_capacity(total);
-        offsets.push(0u32);
-        let mut e = 0;
-        for (i, row) in rows.iter().enumerate() {
-            let start = neighbours.len();
-            neighbours.extend_from_slice(row);
-            while e < extra.len() && extra[e].0 as usize == i {
-                neighbours.push(extra[e].1);
-                e += 1;
+        let (offsets, neighbours) = if extra.is_empty() {
+            (walk_off, walk_nb)
+        } else {
+            // every row's walk, then the pairs only the other end found, sorted in
+            let mut extra_from = vec![0usize; n + 1];
+            for &(i, _) in &extra {
+                extra_from[i as usize + 1] += 1;
             }
-            neighbours[start..].sort_unstable();
-            offsets.push(neighbours.len() as u32);
-        }
-        drop(rows);
-        let mut rest_lengths = vec![0.0; total];
-        rest_lengths
-            .par_chunks_mut(4096)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let first = c * 4096;
-                // find the owning particle of bond `first` by binary search on offsets
-                let mut i = offsets.partition_point(|&o| o as usize <= first) - 1;
-                for (k, r) in chunk.iter_mut().enumerate() {
-                    let b = first + k;
-                    while offsets[i + 1] as usize <= b {
-                        i += 1;
+            let mut offsets = Vec::with_capacity(n + 1);
+            offsets.push(0u32);
+            for i in 0..n {
+                extra_from[i + 1] += extra_from[i];
+                let len = row(i).len() + extra_from[i + 1] - extra_from[i];
+                offsets.push(offsets[i] + len as u32);
+            }
+            let mut neighbours = vec![0u32; total];
+            let offs = offsets.as_slice();
+            let mut particles = vec![(); n];
+            let (extra, extra_from) = (&extra, &extra_from);
+            for_rows(
+                offs,
+                n,
+                particles.as_mut_slice(),
+                neighbours.as_mut_slice(),
+                &|first, block: &mut [()], nb: &mut [u32]| {
+                    let base = offs[first] as usize;
+                    for i in first..first + block.len() {
+                        let out = &mut nb[offs[i] as usize - base..offs[i + 1] as usize - base];
+                        let walked = row(i);
+                        out[..walked.len()].copy_from_slice(walked);
+                        let added = &extra[extra_from[i]..extra_from[i + 1]];
+                        for (slot, &(_, j)) in out[walked.len()..].iter_mut().zip(added) {
+                            *slot = j;
+                        }
+                        if !added.is_empty() {
+                            out.sort_unstable();
+                        }
                     }
-                    let j = neighbours[b] as usize;
-                    *r = norm(sub(positions[j], positions[i]));
+                },
+            );
+            (offsets, neighbours)
+        };
+        let mut rest_lengths = vec![0.0; total];
+        let mut particles = vec![(); n];
+        let (offs, nbs) = (offsets.as_slice(), neighbours.as_slice());
+        for_rows(
+            offs,
+            n,
+            particles.as_mut_slice(),
+            rest_lengths.as_mut_slice(),
+            &|first, block: &mut [()], rl: &mut [f64]| {
+                let base = offs[first] as usize;
+                for i in first..first + block.len() {
+                    let range = offs[i] as usize..offs[i + 1] as usize;
+                    for (r, &j) in rl[range.start - base..range.end - base]
+                        .iter_mut()
+                        .zip(&nbs[range])
+                    {
+                        *r = norm(sub(positions[j as usize], positions[i]));
+                    }
                 }
-            });
+            },
+        );
         let counts = offsets.windows(2).map(|w| (w[1] - w[0]) as usize);
         let isolated: Vec<u32> = counts
             .clone()
@@ -197,39 +228,94 @@ impl Family {
     }
 }
 
-/// One breadth-first walk per particle; each row sorted.
-fn walk_all(positions: &[Vec3], adjacency: &[[u32; 4]], horizon: f64) -> Vec<Vec<u32>> {
+/// Whether the sorted `row` holds `v`, searched outward from index `guess` in doubling steps,
+/// then by bisection within the bracket found: a few reads when the guess is close, never
+/// more than twice a plain bisection's.
+fn contains_near(row: &[u32], v: u32, guess: usize) -> bool {
+    let Some(&at) = row.get(guess.min(row.len().saturating_sub(1))) else {
+        return false;
+    };
+    let g = guess.min(row.len() - 1);
+    let (lo, hi) = match at.cmp(&v) {
+        std::cmp::Ordering::Equal => return true,
+        // v lies right of g: double the step until row[g + step] >= v
+        std::cmp::Ordering::Less => {
+            let mut step = 1;
+            while g + step < row.len() && row[g + step] < v {
+                step *= 2;
+            }
+            (g + step / 2 + 1, (g + step + 1).min(row.len()))
+        }
+        std::cmp::Ordering::Greater => {
+            let mut step = 1;
+            while step <= g && row[g - step] > v {
+                step *= 2;
+            }
+            (g.saturating_sub(step), g - step / 2)
+        }
+    };
+    row[lo..hi].binary_search(&v).is_ok()
+}
+
+/// Particles a walk task takes in turn: one growing buffer for all their rows.
+const WALK_CHUNK: usize = 256;
+
+/// One breadth-first walk per particle, each row sorted, as CSR (row offsets, neighbours):
+/// each task walks [`WALK_CHUNK`] particles into one buffer, so the rows are neither allocated
+/// one by one nor left scattered over the heap when they are freed.
+fn walk_all(
+    positions: &[Vec3],
+    adjacency: &[[u32; 4]],
+    horizon: f64,
+) -> Result<(Vec<u32>, Vec<u32>), PhysicsError> {
     let n = positions.len();
     let h2 = horizon * horizon;
-    (0..n)
+    let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(WALK_CHUNK))
         .into_par_iter()
-        .with_min_len(256)
         .map_init(
             || (vec![u32::MAX; n], Vec::<u32>::new()),
-            |(stamp, queue), i| {
-                let xi = positions[i];
-                let mut row = Vec::new();
-                queue.clear();
-                queue.push(i as u32);
-                stamp[i] = i as u32;
-                let mut head = 0;
-                while head < queue.len() {
-                    let t = queue[head] as usize;
-                    head += 1;
-                    for &u in &adjacency[t] {
-                        if u == NO_NEIGHBOUR || stamp[u as usize] == i as u32 {
-                            continue;
-                        }
-                        stamp[u as usize] = i as u32;
-                        if norm_squared(sub(positions[u as usize], xi)) < h2 {
-                            queue.push(u);
-                            row.push(u);
+            |(stamp, queue), c| {
+                let (mut lens, mut found) = (Vec::with_capacity(WALK_CHUNK), Vec::new());
+                for i in c * WALK_CHUNK..n.min((c + 1) * WALK_CHUNK) {
+                    let xi = positions[i];
+                    let start = found.len();
+                    queue.clear();
+                    queue.push(i as u32);
+                    stamp[i] = i as u32;
+                    let mut head = 0;
+                    while head < queue.len() {
+                        let t = queue[head] as usize;
+                        head += 1;
+                        for &u in &adjacency[t] {
+                            if u == NO_NEIGHBOUR || stamp[u as usize] == i as u32 {
+                                continue;
+                            }
+                            stamp[u as usize] = i as u32;
+                            if norm_squared(sub(positions[u as usize], xi)) < h2 {
+                                queue.push(u);
+                                found.push(u);
+                            }
                         }
                     }
+                    found[start..].sort_unstable();
+                    lens.push((found.len() - start) as u32);
                 }
-                row.sort_unstable();
-                row
+                (lens, found)
             },
         )
-        .collect()
+        .collect();
+    let total: usize = chunks.iter().map(|(_, f)| f.len()).sum();
+    if total > u32::MAX as usize {
+        return Err(PhysicsError::TooManyBonds(total));
+    }
+    let mut offsets = Vec::with_capacity(n + 1);
+    offsets.push(0u32);
+    let mut neighbours = Vec::with_capacity(total);
+    for (lens, found) in chunks {
+        for len in lens {
+            offsets.push(offsets[offsets.len() - 1] + len);
+        }
+        neighbours.extend_from_slice(&found);
+    }
+    Ok((offsets, neighbours))
 }

@@ -61,6 +61,7 @@ pub use material::{
 pub use math::{Real, Vec3};
 pub use particles::Discretization;
 pub use stable_step::{
-    lanczos_frequency, lanczos_frequency_of, max_frequency, stable_frequency, FrequencyEstimate,
+    lanczos_frequency, lanczos_frequency_of, max_frequency, stable_frequency,
+    stable_frequency_memo, EstimateMemo, FrequencyEstimate, MemoKey,
 };
 pub use state::State;

@@ -17,6 +17,10 @@ pub struct FrequencyEstimate {
     pub evaluations: usize,
     /// Relative change of `omega^2` in the last iteration.
     pub last_change: f64,
+    /// Whether the estimate was recalled from an [`EstimateMemo`] (then `evaluations` counts
+    /// only the two that identified the operator; `iterations` and `last_change` are those of
+    /// the run that stored it).
+    pub recalled: bool,
 }
 
 impl FrequencyEstimate {
@@ -24,6 +28,57 @@ impl FrequencyEstimate {
     pub fn critical_step(&self) -> f64 {
         2.0 / self.omega_max
     }
+}
+
+/// A store of finished Lanczos estimates between runs (a directory of small files, say),
+/// looked up by a key that the operator itself writes: see [`lanczos_frequency_of`].
+pub trait EstimateMemo {
+    /// The estimate stored under `key`, if any.
+    fn recall(&self, key: MemoKey) -> Option<FrequencyEstimate>;
+    /// Keeps `estimate` under `key`; a store that fails only costs the next run the iteration.
+    fn store(&self, key: MemoKey, estimate: &FrequencyEstimate);
+}
+
+/// 128 bits that identify one Lanczos iteration: its settings, the masses, the point it
+/// linearises at and the bits of the forces there and at the first probe (two SipHash-1-3
+/// digests of the same words).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MemoKey(pub [u64; 2]);
+
+impl MemoKey {
+    /// 32 lower-case hex digits.
+    pub fn hex(&self) -> String {
+        format!("{:016x}{:016x}", self.0[0], self.0[1])
+    }
+}
+
+/// Bumped whenever the iteration changes (start vector, probe, stopping rule), so a memo
+/// written by an older iteration is never read as this one's.
+const MEMO_VERSION: u64 = 1;
+
+/// Hashes everything the rest of a Lanczos run is a function of. The start vector and every
+/// later probe follow from `n`, the first evaluations and the settings; a model whose
+/// linearised forces differ anywhere differs in `f1` (the start vector moves every particle)
+/// unless the difference is below round-off, and then the estimate is that of the same
+/// operator anyway.
+fn memo_key(settings: [f64; 4], mass: &[f64], y0: &[Vec3], f0: &[Vec3], f1: &[Vec3]) -> MemoKey {
+    use std::hash::Hasher;
+    let digest = |salt: u64| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        h.write_u64(salt);
+        h.write_u64(MEMO_VERSION);
+        h.write_u64(mass.len() as u64);
+        settings.iter().for_each(|v| h.write_u64(v.to_bits()));
+        mass.iter().for_each(|v| h.write_u64(v.to_bits()));
+        for field in [y0, f0, f1] {
+            field
+                .iter()
+                .flatten()
+                .for_each(|v| h.write_u64(v.to_bits()));
+        }
+        h.finish()
+    };
+    MemoKey([digest(0x5eed_0001), digest(0x5eed_0002)])
 }
 
 /// Most Lanczos iterations of the setup's estimate.
@@ -47,7 +102,28 @@ pub fn stable_frequency(
     rest: &[Vec3],
     horizon: f64,
 ) -> (f64, FrequencyEstimate) {
-    let est = lanczos_frequency(model, rest, horizon, LANCZOS_ITERATIONS, LANCZOS_TOLERANCE);
+    stable_frequency_memo(model, rest, horizon, None)
+}
+
+/// [`stable_frequency`], recalling the estimate from `memo` when the same iteration on the
+/// same operator was stored there (two force evaluations in place of all of them; the result
+/// is the stored one bit for bit) and storing it there otherwise.
+pub fn stable_frequency_memo(
+    model: &mut dyn ForceModel,
+    rest: &[Vec3],
+    horizon: f64,
+    memo: Option<&dyn EstimateMemo>,
+) -> (f64, FrequencyEstimate) {
+    let mass = model.masses().to_vec();
+    let est = lanczos_frequency_of(
+        &mass,
+        rest,
+        horizon,
+        LANCZOS_ITERATIONS,
+        LANCZOS_TOLERANCE,
+        &mut |y: &[Vec3], f: &mut [Vec3]| model.trial_forces(y, f),
+        memo,
+    );
     let omega = if est.omega_max.is_finite() && est.omega_max > 0.0 {
         est.omega_max
     } else {
@@ -151,6 +227,7 @@ pub fn max_frequency(
         iterations: it,
         evaluations: 2 * it,
         last_change: change,
+        recalled: false,
     }
 }
 
@@ -179,12 +256,17 @@ pub fn lanczos_frequency(
         max_iterations,
         tolerance,
         &mut |y: &[Vec3], f: &mut [Vec3]| model.trial_forces(y, f),
+        None,
     )
 }
 
 /// [`lanczos_frequency`] for any system of point masses `mass` (kg) whose forces (N) at
 /// positions `y` (m) `forces(y, f)` writes into `f` (a thin shell's, say): the same iteration,
-/// linearised at `y0`.
+/// linearised at `y0`. With a `memo` of finished estimates: after the forces at `y0` and at the
+/// first probe, the bits of both (with the masses, `y0` and the settings) make the key; the
+/// rest of the iteration is a function of them, so an estimate stored under that key is the one
+/// the iteration would reach now, and is returned as it was stored (`recalled`, two
+/// evaluations spent). Otherwise the iteration runs on and stores its result there.
 pub fn lanczos_frequency_of(
     mass: &[f64],
     y0: &[Vec3],
@@ -192,8 +274,10 @@ pub fn lanczos_frequency_of(
     max_iterations: usize,
     tolerance: f64,
     forces: &mut dyn FnMut(&[Vec3], &mut [Vec3]),
+    memo: Option<&dyn EstimateMemo>,
 ) -> FrequencyEstimate {
     let n = y0.len();
+    let mut key = None;
     let mut q = start_vector(n);
     let s = 1.0 / mass_norm(&q, mass);
     scale(&mut q, s);
@@ -215,6 +299,23 @@ pub fn lanczos_frequency_of(
             y[i] = axpy(y0[i], h, q[i]);
         }
         forces(&y, &mut f);
+        if let (Some(memo), 1) = (memo, it) {
+            let k = memo_key(
+                [max_iterations as f64, tolerance, length, h],
+                mass,
+                y0,
+                &f0,
+                &f,
+            );
+            if let Some(stored) = memo.recall(k) {
+                return FrequencyEstimate {
+                    evaluations: 2,
+                    recalled: true,
+                    ..stored
+                };
+            }
+            key = Some(k);
+        }
         // K q into f; alpha = q^T K q
         let mut alpha = 0.0;
         for i in 0..n {
@@ -246,12 +347,17 @@ pub fn lanczos_frequency_of(
             *qi = next;
         }
     }
-    FrequencyEstimate {
+    let est = FrequencyEstimate {
         omega_max: theta.max(0.0).sqrt(),
         iterations: it,
         evaluations: it + 1,
         last_change: change,
+        recalled: false,
+    };
+    if let (Some(memo), Some(k)) = (memo, key) {
+        memo.store(k, &est);
     }
+    est
 }
 
 /// Largest eigenvalue of the symmetric tridiagonal matrix with diagonal `a` and off-diagonal

@@ -5,11 +5,14 @@ mod support;
 use perifrac_physics::energy::angular_momentum;
 use perifrac_physics::math::{cross, norm, sub, Vec3};
 use perifrac_physics::{
-    lanczos_frequency, max_frequency, stable_frequency, ChenModel, Discretization, Explicit,
-    ExplicitConfig, ForceModel, Loads, PhysicsError, TimeStep,
+    lanczos_frequency, max_frequency, stable_frequency, stable_frequency_memo, ChenMaterial,
+    ChenModel, Discretization, EstimateMemo, Explicit, ExplicitConfig, ForceModel, FractureParams,
+    FrequencyEstimate, Loads, MemoKey, PhysicsError, TimeStep,
 };
 use perifrac_topology::mesher::unstructured_box_data;
 use perifrac_topology::TetMesh;
+use std::cell::RefCell;
+use std::collections::HashMap;
 use support::{elastic_block, nonuniform, scalar_block};
 
 fn solver(cells: [usize; 3], dt: TimeStep) -> Explicit<ChenModel> {
@@ -92,6 +95,74 @@ fn auto_step_uses_the_lanczos_estimate() {
     let (omega, lanczos) = stable_frequency(&mut m, &x, delta);
     assert_eq!(est, lanczos);
     assert_eq!(omega, est.omega_max);
+}
+
+/// A memo in memory that counts its stores.
+#[derive(Default)]
+struct Memo {
+    kept: RefCell<HashMap<MemoKey, FrequencyEstimate>>,
+    stores: RefCell<usize>,
+}
+
+impl EstimateMemo for Memo {
+    fn recall(&self, key: MemoKey) -> Option<FrequencyEstimate> {
+        self.kept.borrow().get(&key).copied()
+    }
+    fn store(&self, key: MemoKey, estimate: &FrequencyEstimate) {
+        *self.stores.borrow_mut() += 1;
+        self.kept.borrow_mut().insert(key, *estimate);
+    }
+}
+
+#[test]
+fn a_memo_gives_back_the_iterated_estimate_bit_for_bit_after_two_evaluations() {
+    let estimate = |m: &mut ChenModel, memo: Option<&dyn EstimateMemo>| {
+        let x = m.discretization().rest_positions().to_vec();
+        let delta = m.discretization().horizon();
+        stable_frequency_memo(m, &x, delta, memo)
+    };
+    let memo = Memo::default();
+    let mut m = elastic_block([3, 3, 2], 1.5);
+    let (_, plain) = estimate(&mut m, None);
+    let (omega, cold) = estimate(&mut m, Some(&memo));
+    // keeping it changes nothing about the iteration
+    assert_eq!(cold, plain);
+    assert!(!cold.recalled && cold.evaluations > 10, "{cold:?}");
+    let (again, warm) = estimate(&mut m, Some(&memo));
+    assert_eq!(again.to_bits(), omega.to_bits());
+    assert!(warm.recalled && warm.evaluations == 2, "{warm:?}");
+    assert_eq!(
+        (warm.iterations, warm.last_change),
+        (cold.iterations, cold.last_change)
+    );
+    // the same mesh and material built again, with fracture on: the same operator at rest
+    let (disc, _, _) = support::block([0.03, 0.03, 0.02], [3, 3, 2], 1.5);
+    let brittle = ChenMaterial {
+        fracture: Some(FractureParams {
+            s_crit: 0.01,
+            alpha: 0.0,
+        }),
+        ..support::steel()
+    };
+    let mut b = ChenModel::new(disc, &[brittle]).unwrap();
+    let (_, recalled) = estimate(&mut b, Some(&memo));
+    assert!(
+        recalled.recalled && recalled.omega_max == omega,
+        "{recalled:?}"
+    );
+    // another operator on the same particles (the scalar calibration), or a stiffer steel:
+    // new keys, iterated and kept
+    let (disc, _, _) = support::block([0.03, 0.03, 0.02], [3, 3, 2], 1.5);
+    let stiffer = ChenMaterial::from_young_poisson(200e9 * (1.0 + 1e-9), 0.25, 7800.0).unwrap();
+    for mut other in [
+        support::scalar_block([3, 3, 2], 1.5),
+        ChenModel::new(disc, &[stiffer]).unwrap(),
+    ] {
+        let (_, miss) = estimate(&mut other, Some(&memo));
+        let (_, plain) = estimate(&mut other, None);
+        assert_eq!(miss, plain);
+    }
+    assert_eq!(*memo.stores.borrow(), 3);
 }
 
 /// Steel on a 6 x 6 x 4 unstructured box (seed 3), horizon 1.45 of the mean edge.

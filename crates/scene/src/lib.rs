@@ -27,6 +27,7 @@ pub mod driver;
 pub mod error;
 pub mod fragments;
 pub mod load;
+pub mod memo;
 pub mod output;
 pub mod run;
 pub mod schema;
@@ -40,6 +41,7 @@ pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use fragments::{FragmentBirth, FragmentIds};
 pub use load::Scene;
+pub use memo::MemoDir;
 pub use output::{
     check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SelfContactJson,
     SolverJson, POVRAY_MESH_NAME, RUN_FORMAT,

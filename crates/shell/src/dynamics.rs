@@ -550,6 +550,7 @@ pub fn max_frequency(model: &mut ShellModel, x: &[Vec3]) -> Result<f64, ShellErr
             // state is not return-mapped at the probe's positions.
             let _ = model.frozen_forces(y, f);
         },
+        None,
     );
     Ok(est.omega_max)
 }

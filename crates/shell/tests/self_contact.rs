@@ -374,6 +374,7 @@ fn step_ratio(n: usize, shift: [f64; 2]) -> f64 {
             let _ = model.frozen_forces(y, f);
             let _ = sc.add_forces(&mesh, y, f);
         },
+        None,
     );
     2.0 / est.omega_max / elastic
 }

@@ -247,9 +247,10 @@ impl ChenModel {
             }
             w
         });
-        let moments: Vec<(f64, f64)> = (0..n)
-            .map(|i| family_moments(&disc, weights.as_deref(), i))
-            .collect();
+        let mut moments = vec![(0.0, 0.0); n];
+        map_particles(&mut moments, |i| {
+            family_moments(&disc, weights.as_deref(), i)
+        });
         let c0 = 9.0 / (4.0 * PI * delta.powi(4));
         let c_theta: Vec<f64> = (0..n)
             .map(|i| match moments[i].0 {
@@ -297,18 +298,11 @@ impl ChenModel {
             let target = (targets.as_slice(), disc.materials());
             let l = fit_tensors(fam, x, disc.volumes(), w, delta, &s, target, FIT_RIDGE);
             // each bond carries its reverse's weight too, so the force loop reads both in
-            // one stream; filled in place (through the reverse index when one is kept, else
-            // by a walk that stores none), no other per-bond array is allocated
+            // one stream; both computed in one parallel pass over the rows (the reverse's as
+            // its own row computes it), no other per-bond array is allocated
             let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
-            dilatation_weights(fam, x, w, delta, &l, &s, FIT_BOUND, &c_theta, &mut pairs);
-            match &reverse {
-                Some(rev) => {
-                    for (k, &r) in rev.iter().enumerate() {
-                        pairs[k][1] = pairs[r as usize][0];
-                    }
-                }
-                None => fam.for_each_reverse(|k, r| pairs[k][1] = pairs[r][0]),
-            }
+            let wr = w.zip(reverse.as_deref());
+            dilatation_weights(fam, x, wr, delta, &l, &s, FIT_BOUND, &c_theta, &mut pairs);
             pairs
         });
         let yield_params = plastic.then(|| {

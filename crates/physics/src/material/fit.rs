@@ -210,16 +210,20 @@ pub(crate) fn fit_tensors(
 
 /// Per-bond dilatation weights over the scalar calibration, `d_ij / c_i = w_ij g_ij`, with
 /// `g_ij = q(n_ij) . l_i / c_i` the fit's factor, times `c_i / own[i]` (over the particle's own
-/// constant), written into `out[k][0]` (`omega` is `w` or, without it, `delta / r`). A particle whose largest `|g_ij|` passes
-/// `bound` is blended towards the scalar calibration (`g = 1`): `g' = 1 + a (g - 1)` with the
-/// largest `a <= 1` that keeps every `|g'| <= bound` (its fit is then exact no more).
+/// constant), written into `out[k][0]`, and the reverse bond's `d_ji / c_j` into `out[k][1]`
+/// (`omega` is the deviatoric weights `w` or, without them, `delta / r`; with them, the
+/// reverse index finds the reverse's). A particle whose largest `|g_ij|` passes `bound` is
+/// blended towards the scalar calibration (`g = 1`): `g' = 1 + a (g - 1)` with the largest
+/// `a <= 1` that keeps every `|g'| <= bound` (its fit is then exact no more). The reverse's
+/// value is computed as its own row computes it: `q(n)` is even in `n`, the rest length
+/// symmetric, so both slots hold exactly the bits each end writes for itself.
 // The family, its geometry and weights, the tensors, the scalars and the bound are each the
 // weights' own input.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn dilatation_weights(
     fam: &Family,
     x: &[Vec3],
-    w: Option<&[f64]>,
+    w: Option<(&[f64], &[u32])>,
     delta: f64,
     l: &[[f64; 6]],
     c: &[f64],
@@ -228,30 +232,55 @@ pub(crate) fn dilatation_weights(
     out: &mut [[f64; 2]],
 ) {
     let rl = fam.rest_lengths();
-    // Per particle, its own bonds' slots: in parallel, each particle as it was done in turn.
-    let mut rows = vec![(); fam.len()];
+    let nb = fam.neighbours();
     let offsets = fam.offsets();
+    // First the fit's factors of both ends, `[g_ij, g_ji]` (`q(n_ji) = q(n_ij)` to the bit, so
+    // `g_ji` is what row j computes), and per particle its blend `a` and the factor over its
+    // own constant.
+    let mut blend = vec![[0.0; 2]; fam.len()];
+    for_rows_mut(
+        offsets,
+        &mut blend,
+        out,
+        &|first, blend: &mut [[f64; 2]], out| {
+            let base = offsets[first] as usize;
+            for (i, b) in (first..).zip(blend.iter_mut()) {
+                let mut worst: f64 = 0.0;
+                for k in fam.range(i) {
+                    let j = nb[k] as usize;
+                    let q = mandel(rest_direction(fam, x, i, k));
+                    let g_ij = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
+                    let g_ji = (0..6).map(|p| q[p] * l[j][p]).sum::<f64>() / c[j];
+                    out[k - base] = [g_ij, g_ji];
+                    worst = worst.max((g_ij - 1.0).abs());
+                }
+                // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
+                let a = if worst > bound - 1.0 {
+                    (bound - 1.0) / worst
+                } else {
+                    1.0
+                };
+                *b = [a, c[i] / own[i]];
+            }
+        },
+    );
+    // Then both ends' weights, each blended by its own particle's `a`.
+    let mut rows = vec![(); fam.len()];
+    let blend = &blend;
     for_rows_mut(offsets, &mut rows, out, &|first, block: &mut [()], out| {
         let base = offsets[first] as usize;
         for i in first..first + block.len() {
-            let range = fam.range(i);
-            let mut worst: f64 = 0.0;
-            for k in range.clone() {
-                let q = mandel(rest_direction(fam, x, i, k));
-                let g = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
-                out[k - base][0] = g;
-                worst = worst.max((g - 1.0).abs());
-            }
-            // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
-            let a = if worst > bound - 1.0 {
-                (bound - 1.0) / worst
-            } else {
-                1.0
-            };
-            let scale = c[i] / own[i];
-            for k in range {
-                let d = omega(w, delta, rl, k) * (1.0 + a * (out[k - base][0] - 1.0));
-                out[k - base][0] = d * scale;
+            for k in fam.range(i) {
+                let j = nb[k] as usize;
+                let (w_ij, w_ji) = match w {
+                    None => (delta / rl[k], delta / rl[k]),
+                    Some((w, rev)) => (w[k], w[rev[k] as usize]),
+                };
+                let ([g_ij, g_ji], bi, bj) = (out[k - base], blend[i], blend[j]);
+                out[k - base] = [
+                    w_ij * (1.0 + bi[0] * (g_ij - 1.0)) * bi[1],
+                    w_ji * (1.0 + bj[0] * (g_ji - 1.0)) * bj[1],
+                ];
             }
         }
     });

@@ -1,6 +1,7 @@
 //! From a parsed scene to a ready [`Driver`]: validation with one clear message per problem, the
 //! mesh, materials by region, initial cracks, the peridynamic model, colliders, loads and the
-//! time step. Nothing is written to disk here.
+//! time step. Nothing is written to disk here, except by a memo of stable-step estimates the
+//! caller passes ([`Setup::with_memo`]).
 
 pub(crate) mod check;
 pub use check::MAX_FPS;
@@ -18,7 +19,7 @@ mod xu_material;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use perifrac_physics::{Correction, Discretization, PhysicsError};
+use perifrac_physics::{Correction, Discretization, EstimateMemo, PhysicsError};
 
 use crate::budget::{self, Limits, MeshShape, WorkEstimate};
 use crate::driver::Driver;
@@ -170,6 +171,9 @@ pub struct SetupTimes {
     pub model: Duration,
     /// The stable-step estimate.
     pub stable_step: Duration,
+    /// Whether the material's stable-step estimate was recalled from a memo
+    /// ([`Setup::with_memo`]) rather than iterated.
+    pub stable_step_recalled: bool,
     /// The whole setup, the stages above included.
     pub total: Duration,
 }
@@ -210,6 +214,19 @@ impl Setup {
         scene: &Scene,
         frames: Option<usize>,
         limits: &Limits,
+    ) -> Result<Setup, SceneError> {
+        Setup::with_memo(scene, frames, limits, None)
+    }
+
+    /// [`Setup::with_limits`], recalling the material's stable-step estimate from `memo` (a
+    /// [`crate::memo::MemoDir`], say) when a run before built the same model, and storing it
+    /// there otherwise: the recalled estimate is the iterated one bit for bit, after two force
+    /// evaluations in place of the whole iteration ([`SetupTimes::stable_step_recalled`]).
+    pub fn with_memo(
+        scene: &Scene,
+        frames: Option<usize>,
+        limits: &Limits,
+        memo: Option<&dyn EstimateMemo>,
     ) -> Result<Setup, SceneError> {
         let started = Instant::now();
         let mut times = SetupTimes::default();
@@ -347,8 +364,10 @@ impl Setup {
             )
             .map_err(too_large)?;
         let stage = Instant::now();
-        let dt_limit = step::stable_limit(model.as_dyn(), &rest, horizon, contact);
+        let (dt_limit, recalled) =
+            step::stable_limit(model.as_dyn(), &rest, horizon, contact, memo);
         times.stable_step = stage.elapsed();
+        times.stable_step_recalled = recalled;
         let dt_wanted = match kind {
             solver::Kind::Explicit => step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
             solver::Kind::Implicit => step::implicit_step(&ctx, sim, frames, travel_limit)?,

@@ -3,7 +3,7 @@
 
 use perifrac_contact::Colliders;
 use perifrac_physics::math::norm;
-use perifrac_physics::{stable_frequency, ForceModel};
+use perifrac_physics::{stable_frequency_memo, EstimateMemo, ForceModel};
 
 use crate::error::SceneError;
 use crate::schema::{DtSpec, SimulationSpec};
@@ -15,16 +15,20 @@ use super::defaults;
 /// Estimated stable step (s), `2 / omega`: `omega^2` adds the material's highest frequency
 /// (Lanczos on the linearised forces at `rest`, Silling-Askari when it fails), all
 /// collider springs on the particle that rings fastest on them, the fastest dynamic ball on
-/// the particles it touches and contact between particles (see [`ContactStiffness`]).
+/// the particles it touches and contact between particles (see [`ContactStiffness`]). The
+/// material's estimate is recalled from `memo` when it holds it; the flag says so.
 pub(super) fn stable_limit(
     model: &mut dyn ForceModel,
     rest: &[[f64; 3]],
     horizon: f64,
     contact: ContactStiffness,
-) -> f64 {
-    let (omega, _) = stable_frequency(model, rest, horizon);
-    2.0 / (omega * omega + contact.collider_omega2 + contact.ball_omega2 + contact.self_omega2)
-        .sqrt()
+    memo: Option<&dyn EstimateMemo>,
+) -> (f64, bool) {
+    let (omega, est) = stable_frequency_memo(model, rest, horizon, memo);
+    let dt = 2.0
+        / (omega * omega + contact.collider_omega2 + contact.ball_omega2 + contact.self_omega2)
+            .sqrt();
+    (dt, est.recalled)
 }
 
 /// The longest step (s) in which the fastest ball (by its initial velocity) or particle (by
