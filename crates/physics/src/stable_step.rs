@@ -299,22 +299,14 @@ pub fn lanczos_frequency_of(
             y[i] = axpy(y0[i], h, q[i]);
         }
         forces(&y, &mut f);
-        if let (Some(memo), 1) = (memo, it) {
-            let k = memo_key(
+        if let (Some(_), 1) = (memo, it) {
+            key = Some(memo_key(
                 [max_iterations as f64, tolerance, length, h],
                 mass,
                 y0,
                 &f0,
                 &f,
-            );
-            if let Some(stored) = memo.recall(k) {
-                return FrequencyEstimate {
-                    evaluations: 2,
-                    recalled: true,
-                    ..stored
-                };
-            }
-            key = Some(k);
+            ));
         }
         // K q into f; alpha = q^T K q
         let mut alpha = 0.0;
@@ -323,6 +315,20 @@ pub fn lanczos_frequency_of(
                 f[i][d] = -(f[i][d] - f0[i][d]) / h;
             }
             alpha += dot(q[i], f[i]);
+        }
+        if let (Some(memo), Some(k), 1) = (memo, key, it) {
+            // the iteration's result is its largest Ritz value, never below this first one
+            // (to the rounding of its square root): a stored value that is (a damaged or
+            // foreign file) would allow too long a step, and is not taken
+            let credible =
+                |s: &FrequencyEstimate| s.omega_max * s.omega_max >= alpha * (1.0 - 1e-12);
+            if let Some(stored) = memo.recall(k).filter(credible) {
+                return FrequencyEstimate {
+                    evaluations: 2,
+                    recalled: true,
+                    ..stored
+                };
+            }
         }
         for i in 0..n {
             let inv = 1.0 / mass[i];

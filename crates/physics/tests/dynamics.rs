@@ -163,6 +163,28 @@ fn a_memo_gives_back_the_iterated_estimate_bit_for_bit_after_two_evaluations() {
         assert_eq!(miss, plain);
     }
     assert_eq!(*memo.stores.borrow(), 3);
+
+    // a memo that offers less than the iteration's own first Ritz value (a damaged or foreign
+    // file; a tenth of the true frequency, where the first Ritz value of a random start is
+    // about 0.6 of it here) is not believed: the step it implies could be unstable
+    struct Low(f64);
+    impl EstimateMemo for Low {
+        fn recall(&self, _: MemoKey) -> Option<FrequencyEstimate> {
+            Some(FrequencyEstimate {
+                omega_max: self.0,
+                iterations: 1,
+                evaluations: 1,
+                last_change: 0.0,
+                recalled: false,
+            })
+        }
+        fn store(&self, _: MemoKey, _: &FrequencyEstimate) {}
+    }
+    let (_, low) = estimate(&mut m, Some(&Low(0.1 * omega)));
+    assert_eq!(low, plain);
+    // one above it is taken as stored (the Ritz values only rise from there)
+    let (_, high) = estimate(&mut m, Some(&Low(1.5 * omega)));
+    assert!(high.recalled && high.omega_max == 1.5 * omega, "{high:?}");
 }
 
 /// Steel on a 6 x 6 x 4 unstructured box (seed 3), horizon 1.45 of the mean edge.
