@@ -186,27 +186,20 @@ fn tiny_wall_breaks_into_closed_fragments_and_reruns_identically() {
     // A second run with the same scene and thread count writes the same bytes, whether it
     // recalls the stable step from the cache the first left, or iterates it.
     let cache = tmp.path().join("cache");
-    let summary = |args: &[&str], cache: &Path| {
-        let out = common::perifrac_cached(args, cache);
-        let err = String::from_utf8_lossy(&out.stderr).into_owned();
-        assert!(out.status.success(), "perifrac {args:?} failed:\n{err}");
-        err
-    };
     let (first, again, iterated) = (
         tmp.path().join("first"),
         tmp.path().join("again"),
         tmp.path().join("iterated"),
     );
-    let with = |dir: &Path| {
+    // the summary (stderr) of the run into `dir`, with `extra` arguments and `cache`
+    let run_in = |dir: &Path, extra: &[&str], cache: &Path| {
         let mut a = args.to_vec();
         a[3] = s(dir);
-        a.into_iter().map(str::to_owned).collect::<Vec<_>>()
-    };
-    let run_in = |dir: &Path, extra: &[&str], cache: &Path| {
-        let a = with(dir);
-        let mut a: Vec<&str> = a.iter().map(String::as_str).collect();
         a.extend_from_slice(extra);
-        summary(&a, cache)
+        let out = common::perifrac_cached(&a, cache);
+        let err = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(out.status.success(), "perifrac {a:?} failed:\n{err}");
+        err
     };
     assert!(!run_in(&first, &[], &cache).contains("recalled"));
     assert!(run_in(&again, &[], &cache).contains("recalled from the cache"));

@@ -3,7 +3,7 @@
 
 use crate::error::PhysicsError;
 use crate::math::{norm, norm_squared, sub, Vec3};
-use crate::par::for_rows;
+use crate::par::for_each_row;
 use rayon::prelude::*;
 
 /// Marker for "no neighbour across this face" in face adjacency tables.
@@ -82,53 +82,28 @@ impl Family {
                 offsets.push(offsets[i] + len as u32);
             }
             let mut neighbours = vec![0u32; total];
-            let offs = offsets.as_slice();
-            let mut particles = vec![(); n];
             let (extra, extra_from) = (&extra, &extra_from);
-            for_rows(
-                offs,
-                n,
-                particles.as_mut_slice(),
-                neighbours.as_mut_slice(),
-                &|first, block: &mut [()], nb: &mut [u32]| {
-                    let base = offs[first] as usize;
-                    for i in first..first + block.len() {
-                        let out = &mut nb[offs[i] as usize - base..offs[i + 1] as usize - base];
-                        let walked = row(i);
-                        out[..walked.len()].copy_from_slice(walked);
-                        let added = &extra[extra_from[i]..extra_from[i + 1]];
-                        for (slot, &(_, j)) in out[walked.len()..].iter_mut().zip(added) {
-                            *slot = j;
-                        }
-                        if !added.is_empty() {
-                            out.sort_unstable();
-                        }
-                    }
-                },
-            );
+            for_each_row(&offsets, &mut neighbours, &|i, out: &mut [u32]| {
+                let walked = row(i);
+                out[..walked.len()].copy_from_slice(walked);
+                let added = &extra[extra_from[i]..extra_from[i + 1]];
+                for (slot, &(_, j)) in out[walked.len()..].iter_mut().zip(added) {
+                    *slot = j;
+                }
+                if !added.is_empty() {
+                    out.sort_unstable();
+                }
+            });
             (offsets, neighbours)
         };
         let mut rest_lengths = vec![0.0; total];
-        let mut particles = vec![(); n];
         let (offs, nbs) = (offsets.as_slice(), neighbours.as_slice());
-        for_rows(
-            offs,
-            n,
-            particles.as_mut_slice(),
-            rest_lengths.as_mut_slice(),
-            &|first, block: &mut [()], rl: &mut [f64]| {
-                let base = offs[first] as usize;
-                for i in first..first + block.len() {
-                    let range = offs[i] as usize..offs[i + 1] as usize;
-                    for (r, &j) in rl[range.start - base..range.end - base]
-                        .iter_mut()
-                        .zip(&nbs[range])
-                    {
-                        *r = norm(sub(positions[j as usize], positions[i]));
-                    }
-                }
-            },
-        );
+        for_each_row(offs, &mut rest_lengths, &|i, rl: &mut [f64]| {
+            let row = &nbs[offs[i] as usize..offs[i + 1] as usize];
+            for (r, &j) in rl.iter_mut().zip(row) {
+                *r = norm(sub(positions[j as usize], positions[i]));
+            }
+        });
         let counts = offsets.windows(2).map(|w| (w[1] - w[0]) as usize);
         let isolated: Vec<u32> = counts
             .clone()

@@ -51,6 +51,30 @@ pub(crate) fn for_rows_mut<P: Send, B: Send, F>(
     split_rows(offsets, 0, n, per_particle, per_bond, f);
 }
 
+/// Calls `f(i, row)` for every particle `i` (`offsets.len() - 1` of them), `row` its own bonds'
+/// slots of `per_bond` (CSR `offsets`), in parallel blocks.
+pub(crate) fn for_each_row<B: Send, F>(offsets: &[u32], per_bond: &mut [B], f: &F)
+where
+    F: Fn(usize, &mut [B]) + Sync,
+{
+    // zero-sized: no storage
+    let mut particles = vec![(); offsets.len() - 1];
+    for_rows_mut(
+        offsets,
+        &mut particles,
+        per_bond,
+        &|first, block: &mut [()], bonds| {
+            let base = offsets[first] as usize;
+            for i in first..first + block.len() {
+                f(
+                    i,
+                    &mut bonds[offsets[i] as usize - base..offsets[i + 1] as usize - base],
+                );
+            }
+        },
+    );
+}
+
 /// As [`for_rows_mut`] with any [`Rows`] per particle and per bond (a slice, or a pair of
 /// them, split alike), over the `n` particles.
 pub(crate) fn for_rows<P: Rows, B: Rows, F>(offsets: &[u32], n: usize, p: P, b: B, f: &F)

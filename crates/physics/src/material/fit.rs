@@ -25,7 +25,7 @@
 
 use crate::family::Family;
 use crate::math::{sub, Vec3};
-use crate::par::{for_rows_mut, map_particles};
+use crate::par::{for_each_row, for_rows_mut, map_particles};
 
 /// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
 /// `L`.
@@ -265,23 +265,19 @@ pub(crate) fn dilatation_weights(
         },
     );
     // Then both ends' weights, each blended by its own particle's `a`.
-    let mut rows = vec![(); fam.len()];
     let blend = &blend;
-    for_rows_mut(offsets, &mut rows, out, &|first, block: &mut [()], out| {
-        let base = offsets[first] as usize;
-        for i in first..first + block.len() {
-            for k in fam.range(i) {
-                let j = nb[k] as usize;
-                let (w_ij, w_ji) = match w {
-                    None => (delta / rl[k], delta / rl[k]),
-                    Some((w, rev)) => (w[k], w[rev[k] as usize]),
-                };
-                let ([g_ij, g_ji], bi, bj) = (out[k - base], blend[i], blend[j]);
-                out[k - base] = [
-                    w_ij * (1.0 + bi[0] * (g_ij - 1.0)) * bi[1],
-                    w_ji * (1.0 + bj[0] * (g_ji - 1.0)) * bj[1],
-                ];
-            }
+    for_each_row(offsets, out, &|i, row: &mut [[f64; 2]]| {
+        for (k, slot) in fam.range(i).zip(row) {
+            let j = nb[k] as usize;
+            let (w_ij, w_ji) = match w {
+                None => (delta / rl[k], delta / rl[k]),
+                Some((w, rev)) => (w[k], w[rev[k] as usize]),
+            };
+            let ([g_ij, g_ji], bi, bj) = (*slot, blend[i], blend[j]);
+            *slot = [
+                w_ij * (1.0 + bi[0] * (g_ij - 1.0)) * bi[1],
+                w_ji * (1.0 + bj[0] * (g_ji - 1.0)) * bj[1],
+            ];
         }
     });
 }

@@ -550,23 +550,15 @@ impl QuasiNewtonModel for XuModel {
             "one stiffness per directed bond"
         );
         let alive = self.damage.as_ref().map(|d| d.bond_state());
-        crate::par::for_rows_mut(
-            fam.offsets(),
-            &mut vec![(); fam.len()],
-            out,
-            &|first, block: &mut [()], out: &mut [f64]| {
-                let base = fam.offsets()[first] as usize;
-                for i in first..first + block.len() {
-                    for k in fam.range(i) {
-                        out[k - base] = if alive.is_none_or(|a| a[k] != 0) {
-                            scale * self.rest_bond_stiffness(i, k)
-                        } else {
-                            0.0
-                        };
-                    }
-                }
-            },
-        );
+        crate::par::for_each_row(fam.offsets(), out, &|i, row: &mut [f64]| {
+            for (k, slot) in fam.range(i).zip(row) {
+                *slot = if alive.is_none_or(|a| a[k] != 0) {
+                    scale * self.rest_bond_stiffness(i, k)
+                } else {
+                    0.0
+                };
+            }
+        });
     }
 
     /// One dilatation pass and one fused force-and-energy pass (three bond loops become two).
