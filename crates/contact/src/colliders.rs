@@ -398,6 +398,20 @@ impl Colliders {
         grounds.chain(balls).fold(0.0, f64::max)
     }
 
+    /// The least gap (m) between a sphere of `radius` (m) at `p` and any ground or ball:
+    /// negative when it penetrates one, infinite when there is no collider.
+    pub fn clearance(&self, p: Vec3, radius: f64) -> f64 {
+        let grounds = self
+            .grounds
+            .iter()
+            .map(|g| dot(sub(p, g.point()), g.normal) - radius);
+        let balls = self
+            .balls
+            .iter()
+            .map(|b| norm(sub(p, b.center())) - radius - b.shape.radius);
+        grounds.chain(balls).fold(f64::INFINITY, f64::min)
+    }
+
     /// `p` (m) moved along each collider's normal so that a sphere of `radius` (m) there
     /// penetrates no ground or ball by more than `depth` (m, >= 0), each in turn (grounds
     /// first). For a point a mesh edit puts inside a collider (a new vertex on a chord of a

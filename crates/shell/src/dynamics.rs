@@ -5,13 +5,14 @@
 mod newmark;
 pub use newmark::{NewmarkConfig, NewmarkStats};
 
+use hashbrown::HashMap;
 use perifrac_checkpoint::{Reader, Writer};
 use perifrac_contact::{Colliders, ContactStats};
 
 use crate::error::ShellError;
 use crate::fracture::FractureReport;
 use crate::model::ShellModel;
-use crate::self_contact::{SelfContact, SelfContactStats, ShellSelfContact};
+use crate::self_contact::{PairKey, SelfContact, SelfContactStats, ShellSelfContact};
 use perifrac_physics::lanczos_frequency_of;
 use perifrac_physics::math::{add, axpy, dot, norm, scale, sub, Vec3};
 use perifrac_physics::stable_step::{LANCZOS_ITERATIONS, LANCZOS_TOLERANCE};
@@ -29,6 +30,10 @@ pub(crate) struct Snapshot {
     time: f64,
     /// The implicit step's accelerations (empty when explicit).
     acc: Vec<Vec3>,
+    /// The contact radii (a step regrows forgiven ones).
+    radii: Vec<f64>,
+    /// Self-contact's forgiven overlaps (an evaluation regrows them).
+    forgiven: HashMap<PairKey, f64>,
     /// The colliders' moving state (balls).
     colliders: Writer,
 }
@@ -49,7 +54,15 @@ pub struct ShellDynamics {
     time: f64,
     /// Ground planes and balls the vertices touch, with each vertex's contact radius (m).
     colliders: Option<Colliders>,
+    /// Each vertex's contact radius (m): `contact_radius`, or less while a fracture round's
+    /// overlap is forgiven ([`Self::forgive_overlaps`]).
     radii: Vec<f64>,
+    /// The vertices' contact radius (m): half the thickness.
+    contact_radius: f64,
+    /// Each vertex's reference mass for contact (kg): its mass when the colliders were set;
+    /// a vertex fracture adds takes its sources' mean. A vertex's penalty stiffness is the
+    /// colliders' times its mass over this, so it follows the vertex's share of the surface.
+    contact_mass: Vec<f64>,
     contact: ContactStats,
     /// Wall time spent in the colliders' contact pass, all steps (s).
     collider_seconds: f64,
@@ -84,6 +97,8 @@ impl ShellDynamics {
             time: 0.0,
             colliders: None,
             radii: Vec::new(),
+            contact_radius: 0.0,
+            contact_mass: Vec::new(),
             contact: ContactStats::default(),
             collider_seconds: 0.0,
             depths: Vec::new(),
@@ -117,6 +132,11 @@ impl ShellDynamics {
             Some(nm) => s.acc.clone_from(&nm.acc),
             None => s.acc.clear(),
         }
+        s.radii.clone_from(&self.radii);
+        match &self.self_contact {
+            Some(sc) => s.forgiven.clone_from(sc.forgiven()),
+            None => s.forgiven.clear(),
+        }
         s.colliders.clear();
         if let Some(c) = &self.colliders {
             c.save(&mut s.colliders);
@@ -134,6 +154,10 @@ impl ShellDynamics {
         self.time = s.time;
         if let Some(nm) = &mut self.newmark {
             nm.acc.clone_from(&s.acc);
+        }
+        self.radii.clone_from(&s.radii);
+        if let Some(sc) = &mut self.self_contact {
+            sc.set_forgiven(&s.forgiven);
         }
         if let Some(c) = &mut self.colliders {
             // Saved from these very colliders a moment ago: it reads back.
@@ -263,9 +287,10 @@ impl ShellDynamics {
             });
         }
         self.radii = vec![radius; self.x.len()];
+        self.contact_radius = radius;
+        self.contact_mass = self.model.masses().to_vec();
         let mut colliders = colliders;
-        // One stiffness for every vertex: a per-particle scale would not follow the vertices
-        // fracture adds.
+        // Every vertex at the colliders' stiffness until fracture divides its surface.
         colliders
             .set_stiffness_scale(Vec::new())
             .map_err(|cause| ShellError::Contact(cause.to_string()))?;
@@ -382,7 +407,9 @@ impl ShellDynamics {
             });
         }
         if self.newmark.is_some() {
-            return self.newmark_step(dt);
+            self.newmark_step(dt)?;
+            self.regrow_radii();
+            return Ok(());
         }
         self.kick(0.5 * dt);
         for (x, v) in self.x.iter_mut().zip(&self.v) {
@@ -404,6 +431,7 @@ impl ShellDynamics {
         self.add_self_contact()?;
         self.kick(0.5 * dt);
         self.time += dt;
+        self.regrow_radii();
         if !(self.elastic.is_finite() && self.self_energy.is_finite()) {
             return Err(ShellError::RanAway { time: self.time });
         }
@@ -434,15 +462,20 @@ impl ShellDynamics {
         if self.model.worst_fracture_ratio(&self.x)? <= 1.0 {
             return Ok(FractureReport::default());
         }
-        // With colliders, each vertex's penetration before the round: a vertex the round puts
-        // on a chord of the surface wrapped round a ball (or budges onto one) goes no deeper
-        // than it, or its sources, were (the penalty would shoot it out with its overlap's
-        // energy: a punctured sheet's chips left at 260 m/s).
+        // With colliders, each vertex's penetration before the round (with its own contact
+        // radius): a vertex the round puts on a chord of the surface wrapped round a ball (or
+        // budges onto one) presses no deeper than it, or its sources, did.
         if let Some(c) = &self.colliders {
-            let r = self.radii.first().copied().unwrap_or(0.0);
             self.depths.clear();
-            self.depths
-                .extend(self.x.iter().map(|p| c.penetration(*p, r)));
+            self.depths.extend(
+                self.x
+                    .iter()
+                    .zip(&self.radii)
+                    .map(|(p, &r)| c.penetration(*p, r)),
+            );
+        }
+        if let Some(sc) = &mut self.self_contact {
+            sc.begin_edit();
         }
         let report = self.model.fracture(&mut self.x, &mut self.v)?;
         if !report.changed {
@@ -450,32 +483,27 @@ impl ShellDynamics {
         }
         self.topology += 1;
         for src in &report.added {
-            let pinned = self.pinned[src[0] as usize] && self.pinned[src[1] as usize];
+            let (a, b) = (src[0] as usize, src[1] as usize);
+            let pinned = self.pinned[a] && self.pinned[b];
             self.pinned.push(pinned);
             // An implicit shell's new vertex starts with its sources' mean acceleration (a
             // point on an edge between them).
             if let Some(nm) = &mut self.newmark {
-                let (a, b) = (src[0] as usize, src[1] as usize);
                 if let (Some(&aa), Some(&ab)) = (nm.acc.get(a), nm.acc.get(b)) {
                     nm.acc.push(scale(add(aa, ab), 0.5));
                 }
             }
-            if let Some(&r) = self.radii.first() {
-                self.radii.push(r);
-            }
-        }
-        if let Some(c) = &self.colliders {
-            let r = self.radii.first().copied().unwrap_or(0.0);
-            // A vertex added may come from one added before it in the same round: its
-            // allowance is filled in first.
-            for [a, b] in &report.added {
-                let allowed = self.depths[*a as usize].max(self.depths[*b as usize]);
+            if self.colliders.is_some() {
+                self.radii.push(self.contact_radius);
+                let m = 0.5 * (self.contact_mass[a] + self.contact_mass[b]);
+                self.contact_mass.push(m);
+                // A vertex added may come from one added before it in the same round.
+                let allowed = self.depths[a].max(self.depths[b]);
                 self.depths.push(allowed);
             }
-            for (p, &allowed) in self.x.iter_mut().zip(&self.depths) {
-                *p = c.push_out(*p, r, allowed);
-            }
         }
+        self.scale_contact()?;
+        self.forgive_overlaps();
         self.f.resize(self.x.len(), [0.0; 3]);
         // A round that only released stress beside cracks already there leaves the triangles
         // and the rest positions as they were: the self-contact list stays good (rebuilding
@@ -487,6 +515,67 @@ impl ShellDynamics {
         }
         self.internal_forces()?;
         Ok(report)
+    }
+
+    /// After a fracture round: a vertex now deeper in a collider than `depths` allows (its own
+    /// depth, or its sources', before the round) has its contact radius shrunk by the excess,
+    /// so the round stores no energy. A new point on a chord of a sheet wrapped round a ball
+    /// lies inside the ball by the chord's sagitta (0.56 mm for an 8.3 mm edge round the
+    /// punctured sheet's ball); pushed out to the allowed depth, its triangles took the
+    /// sagitta as strain (0.2 J, against 1e-6 J in the whole sheet), and under the penalty
+    /// the overlap's energy shot it out. Only when the radius would fall below half the
+    /// smallest ball's (a depth no chord reaches) is the rest pushed out.
+    fn forgive_overlaps(&mut self) {
+        let Some(c) = &self.colliders else {
+            return;
+        };
+        let floor = c.balls().map(|b| -0.5 * b.radius).fold(0.0f64, f64::min);
+        for ((p, r), &allowed) in self.x.iter_mut().zip(&mut self.radii).zip(&self.depths) {
+            let excess = c.penetration(*p, *r) - allowed;
+            if excess > 0.0 {
+                *r = (*r - excess).max(floor);
+                *p = c.push_out(*p, *r, allowed);
+            }
+        }
+    }
+
+    /// Grows the contact radii that [`Self::forgive_overlaps`] shrank back towards the full
+    /// radius as far as each vertex's clearance from every collider allows (so no contact
+    /// starts deeper than it was), after a step.
+    fn regrow_radii(&mut self) {
+        let Some(c) = &self.colliders else {
+            return;
+        };
+        let full = self.contact_radius;
+        for (p, r) in self.x.iter().zip(&mut self.radii) {
+            if *r < full {
+                let clear = c.clearance(*p, *r);
+                if clear > 0.0 {
+                    *r = (*r + clear).min(full);
+                }
+            }
+        }
+    }
+
+    /// Gives each vertex the colliders' stiffness times its mass over its reference mass, after
+    /// fracture changed the masses: a crack through a vertex in contact divides its stiffness
+    /// among the copies as it divides its mass. With one stiffness for all, each copy pressed
+    /// as hard as the whole vertex had (the contact force under a ball grew with every crack
+    /// through it), and a copy a tenth as heavy was shot out by the overlap's energy (chips
+    /// of the punctured sheet left at 35 m/s).
+    fn scale_contact(&mut self) -> Result<(), ShellError> {
+        let Some(c) = &mut self.colliders else {
+            return Ok(());
+        };
+        let scale: Vec<f64> = self
+            .model
+            .masses()
+            .iter()
+            .zip(&self.contact_mass)
+            .map(|(&m, &m0)| if m0 > 0.0 { m / m0 } else { 1.0 })
+            .collect();
+        c.set_stiffness_scale(scale)
+            .map_err(|cause| ShellError::Contact(cause.to_string()))
     }
 
     /// The stable step (s) at the current positions: `2 / omega` with `omega^2` the highest
@@ -505,14 +594,14 @@ impl ShellDynamics {
 
     /// What the colliders add to the highest squared angular frequency (1/s^2): their
     /// stiffnesses summed (a vertex touching every one at once) over the lightest free
-    /// vertex's mass; 0 without colliders.
+    /// vertex's reference mass (its stiffness and its mass shrink together when fracture
+    /// divides it); 0 without colliders.
     pub fn collider_omega2(&self) -> f64 {
         let Some(c) = &self.colliders else {
             return 0.0;
         };
         let lightest = self
-            .model
-            .masses()
+            .contact_mass
             .iter()
             .zip(&self.pinned)
             .filter(|(_, &p)| !p)
