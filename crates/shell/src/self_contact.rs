@@ -261,7 +261,8 @@ impl SelfContact {
     }
 
     /// Adds the penalty forces (N) at positions `x` (m) of `mesh`'s vertices into `forces`;
-    /// returns the penalty energy (J).
+    /// returns the penalty energy (J). The first evaluation after an edit forgives what it
+    /// added ([`SelfContact::begin_edit`]); each lets forgiven bands grow back.
     pub fn add_forces(
         &mut self,
         mesh: &ShellMesh,
@@ -387,7 +388,8 @@ impl SelfContact {
     }
 
     /// The penalty energy (J) at positions `x` (m) (allocates a force buffer: for checks, not
-    /// for stepping).
+    /// for stepping). An evaluation like [`SelfContact::add_forces`]: it forgives a pending
+    /// edit's overlaps and lets forgiven bands grow back to the distances at `x`.
     pub fn energy(&mut self, mesh: &ShellMesh, x: &[Vec3]) -> Result<f64, ShellError> {
         let mut f = vec![[0.0; 3]; x.len()];
         self.add_forces(mesh, x, &mut f)
