@@ -113,6 +113,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 );
             }
             eprintln!("resuming {} from {}", cp.header.summary, dir.display());
+            if cp.is_shell() {
+                let (scene, text) = (cp.scene_path.clone(), cp.scene_text.clone());
+                return run_shell(&scene, &text, dir, args, threads, Some(&cp));
+            }
             let scene = cp.scene()?;
             (dir.as_path(), scene, Some(cp.frames), Some(cp))
         }
@@ -124,7 +128,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
             let text = std::fs::read_to_string(scene)
                 .with_context(|| format!("cannot read {}", scene.display()))?;
             if perifrac_scene::is_shell_scene(&text) {
-                return run_shell(scene, &text, dir, args, threads);
+                return run_shell(scene, &text, dir, args, threads, None);
             }
             (dir.as_path(), Scene::load(scene)?, args.frames, None)
         }
@@ -216,11 +220,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let wall = t0.elapsed().as_secs_f64();
     let summary = result.map_err(|e| stopped(e, &scene.path, dir))?;
     // steps taken by this process (a resumed run took the others before)
-    let resumed_at = checkpoint.as_ref().map_or(0, |cp| {
-        (cp.position.frame as u64 - 1)
-            .saturating_mul(cp.steps_per_frame)
-            .saturating_add(cp.position.step_in_frame)
-    });
+    let resumed_at = checkpoint.as_ref().map_or(0, steps_before);
     let stepped = summary.steps.saturating_sub(resumed_at);
     let t = summary.stage_times;
     let share =
@@ -304,11 +304,20 @@ pub fn run(args: &RunArgs) -> Result<()> {
     Ok(())
 }
 
-/// Runs a thin-shell scene (`[shell]`): setup line, progress bar, summary.
-fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usize) -> Result<()> {
+/// Runs a thin-shell scene (`[shell]`), or resumes one from `checkpoint`: setup line, progress
+/// bar, summary.
+fn run_shell(
+    scene: &Path,
+    text: &str,
+    dir: &Path,
+    args: &RunArgs,
+    threads: usize,
+    checkpoint: Option<&Checkpoint>,
+) -> Result<()> {
     let started = Instant::now();
     let parsed = ShellScene::parse(text, scene)?;
-    let setup = ShellSetup::new(&parsed, args.frames, args.allow_large).map_err(|e| match e {
+    let frames = checkpoint.map(|cp| cp.frames).or(args.frames);
+    let setup = ShellSetup::new(&parsed, frames, args.allow_large).map_err(|e| match e {
         SceneError::TooLarge { .. } => {
             anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
         }
@@ -341,15 +350,26 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let mut bar = Bar::new(interactive, interrupt_flag()?);
     let t0 = Instant::now();
-    let result = perifrac_scene::run_shell(setup, dir, &mut bar);
+    let result = match checkpoint {
+        Some(cp) => perifrac_scene::resume_shell(setup, cp, dir, &mut bar),
+        None => perifrac_scene::run_shell(setup, dir, &mut bar),
+    };
     bar.finish();
     let wall = t0.elapsed().as_secs_f64();
     let s = result.map_err(|e| stopped(e, scene, dir))?;
+    // steps taken by this process (a resumed run took the others before)
+    let resumed_at = checkpoint.map_or(0, steps_before);
+    let stepped = s.steps.saturating_sub(resumed_at);
     eprintln!(
-        "done in {wall:.2} s: {} steps ({:.0} steps/s), t = {:.4e} s, {} triangles broken, {} \
+        "done in {wall:.2} s: {} steps ({}{:.0} steps/s), t = {:.4e} s, {} triangles broken, {} \
          pieces, {} triangles yielded",
         s.steps,
-        s.steps as f64 / wall.max(1e-9),
+        if resumed_at > 0 {
+            format!("{stepped} after resuming, ")
+        } else {
+            String::new()
+        },
+        stepped as f64 / wall.max(1e-9),
         s.time,
         s.broken_triangles,
         s.fragments,
@@ -416,6 +436,13 @@ fn run_shell(scene: &Path, text: &str, dir: &Path, args: &RunArgs, threads: usiz
         eprintln!("{}", crate::export::describe(usd, *took));
     }
     Ok(())
+}
+
+/// Steps a resumed run took before its checkpoint.
+fn steps_before(cp: &Checkpoint) -> u64 {
+    (cp.position.frame as u64 - 1)
+        .saturating_mul(cp.steps_per_frame)
+        .saturating_add(cp.position.step_in_frame)
 }
 
 /// The exit status of a run stopped by SIGINT or SIGTERM (after its checkpoint), as a shell

@@ -84,6 +84,30 @@ pub(crate) fn write(
     recorded: &[FrameJson],
     driver: &Driver,
 ) -> Result<PathBuf, SceneError> {
+    let summary = format!(
+        "{} at step {} (t = {:.6e} s), stepping to frame {} of {}",
+        run.scene_path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        driver.solver().steps(),
+        driver.solver().time(),
+        position.frame,
+        run.frames
+    );
+    write_with(dir, run, position, recorded, summary, |w| driver.save(w))
+}
+
+/// Writes `dir/checkpoint.bin` atomically: the run's place and `recorded` frames as
+/// [`Checkpoint::read`] reads them, then what `state` writes (the state
+/// [`Checkpoint::state`] gives back), under a header with `summary`.
+pub(crate) fn write_with(
+    dir: &Path,
+    run: &RunIdentity,
+    position: Position,
+    recorded: &[FrameJson],
+    summary: String,
+    state: impl FnOnce(&mut Writer),
+) -> Result<PathBuf, SceneError> {
     let mut w = Writer::new();
     w.tag("run");
     w.str(&run.scene_path.to_string_lossy());
@@ -97,20 +121,11 @@ pub(crate) fn write(
         message: format!("cannot encode the frames for the checkpoint: {e}"),
     })?;
     w.str(&frames);
-    driver.save(&mut w);
+    state(&mut w);
     let header = Header {
         program: program(),
         fingerprint: run.fingerprint,
-        summary: format!(
-            "{} at step {} (t = {:.6e} s), stepping to frame {} of {}",
-            run.scene_path
-                .file_name()
-                .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
-            driver.solver().steps(),
-            driver.solver().time(),
-            position.frame,
-            run.frames
-        ),
+        summary,
     };
     let bytes = perifrac_checkpoint::seal(&header, w.bytes());
     let path = dir.join(CHECKPOINT_FILE);
@@ -129,14 +144,40 @@ pub(crate) struct RunIdentity {
 }
 
 impl RunIdentity {
+    /// A shell run's: its fingerprint hashes the scene text, the frames and steps, the step,
+    /// and the fresh setup's rest mesh.
+    pub(crate) fn of_shell(setup: &crate::shell::ShellSetup) -> RunIdentity {
+        let mut w = Writer::new();
+        w.str(&setup.scene_text);
+        w.usize(setup.frames);
+        w.u64(setup.steps_per_frame);
+        w.f64(setup.info.dt);
+        let mesh = setup.shell.shell().model().mesh();
+        w.array(mesh.vertices());
+        w.array(mesh.triangles());
+        let fingerprint = fnv1a_from(fnv1a(b"perifrac shell scene"), w.bytes());
+        let (path, text) = (&setup.scene_path, &setup.scene_text);
+        RunIdentity::new(path, text, setup.frames, setup.steps_per_frame, fingerprint)
+    }
+
     pub(crate) fn of(setup: &Setup) -> RunIdentity {
+        let (path, text) = (&setup.scene_path, &setup.scene_text);
+        RunIdentity::new(
+            path,
+            text,
+            setup.frames,
+            setup.steps_per_frame,
+            fingerprint(setup),
+        )
+    }
+
+    fn new(path: &Path, text: &str, frames: usize, steps: u64, fingerprint: u64) -> RunIdentity {
         RunIdentity {
-            scene_path: std::path::absolute(&setup.scene_path)
-                .unwrap_or_else(|_| setup.scene_path.clone()),
-            scene_text: setup.scene_text.clone(),
-            frames: setup.frames,
-            steps_per_frame: setup.steps_per_frame,
-            fingerprint: fingerprint(setup),
+            scene_path: std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+            scene_text: text.to_owned(),
+            frames,
+            steps_per_frame: steps,
+            fingerprint,
         }
     }
 }
@@ -221,6 +262,50 @@ impl Checkpoint {
         })
     }
 
+    /// Refuses the checkpoint in `dir` unless it was written for the run `id` identifies
+    /// (built afresh from the scene): the same scene text and fingerprint; `changes` says what
+    /// else could have changed.
+    pub(crate) fn check_identity(
+        &self,
+        dir: &Path,
+        id: &RunIdentity,
+        changes: &str,
+    ) -> Result<(), SceneError> {
+        let bad = |message: String| SceneError::Checkpoint {
+            path: dir.join(CHECKPOINT_FILE),
+            message,
+        };
+        if id.scene_text != self.scene_text {
+            return Err(bad(format!(
+                "it belongs to another scene than {} (the scene text differs)",
+                id.scene_path.display()
+            )));
+        }
+        if id.fingerprint != self.header.fingerprint {
+            return Err(bad(format!(
+                "the setup of {} is no longer the one the checkpoint was written for ({changes} \
+                 changed); rerun the scene",
+                id.scene_path.display()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The state after the run's place (the driver's, or a shell run's).
+    pub(crate) fn state(&self) -> &[u8] {
+        &self.body[self.state_at..]
+    }
+
+    /// The shell scene as run, parsed again (for [`crate::resume_shell`]).
+    pub fn shell_scene(&self) -> Result<crate::ShellScene, SceneError> {
+        crate::ShellScene::parse(&self.scene_text, &self.scene_path)
+    }
+
+    /// Whether the run is a thin-shell scene's (resume it with [`crate::resume_shell`]).
+    pub fn is_shell(&self) -> bool {
+        crate::shell::is_shell_scene(&self.scene_text)
+    }
+
     /// The scene as run, parsed again (relative mesh paths resolve against the original
     /// scene file's directory).
     pub fn scene(&self) -> Result<Scene, SceneError> {
@@ -230,24 +315,15 @@ impl Checkpoint {
     /// Checks that `setup` (built from [`Checkpoint::scene`] with [`Checkpoint::frames`]) is
     /// the run the checkpoint was written for, then restores its driver to the saved state.
     pub(crate) fn restore(&self, dir: &Path, setup: &mut Setup) -> Result<(), SceneError> {
-        let path = dir.join(CHECKPOINT_FILE);
+        self.check_identity(
+            dir,
+            &RunIdentity::of(setup),
+            "its mesh file, frames or step",
+        )?;
         let bad = |message: String| SceneError::Checkpoint {
-            path: path.clone(),
+            path: dir.join(CHECKPOINT_FILE),
             message,
         };
-        if setup.scene_text != self.scene_text {
-            return Err(bad(format!(
-                "it belongs to another scene than {} (the scene text differs)",
-                setup.scene_path.display()
-            )));
-        }
-        if fingerprint(setup) != self.header.fingerprint {
-            return Err(bad(format!(
-                "the setup of {} is no longer the one the checkpoint was written for (its mesh \
-                 file, frames or step changed); rerun the scene",
-                setup.scene_path.display()
-            )));
-        }
         let mut r = Reader::new(&self.body[self.state_at..]);
         setup
             .driver

@@ -49,6 +49,7 @@ pub use output::{
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
 pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo, SetupTimes};
 pub use shell::{
-    is_shell_scene, run_shell, ShellManifest, ShellScene, ShellSetup, ShellSetupInfo, ShellSummary,
+    is_shell_scene, resume_shell, run_shell, ShellManifest, ShellScene, ShellSetup, ShellSetupInfo,
+    ShellSummary,
 };
 pub use usd::{export_usd, UsdLayout, UsdReport, DEFAULT_FPS};

@@ -6,7 +6,7 @@ mod newmark;
 pub use newmark::{NewmarkConfig, NewmarkStats};
 
 use hashbrown::HashMap;
-use perifrac_checkpoint::{Reader, Writer};
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use perifrac_contact::{Colliders, ContactStats};
 
 use crate::error::ShellError;
@@ -163,6 +163,102 @@ impl ShellDynamics {
             // Saved from these very colliders a moment ago: it reads back.
             let _ = c.restore(&mut Reader::new(s.colliders.bytes()));
         }
+    }
+
+    /// Whether [`ShellDynamics::write_checkpoint`] keeps everything a step needs: not for
+    /// Newmark, whose factored step matrices depend on where they were built.
+    pub fn can_checkpoint(&self) -> bool {
+        self.newmark.is_none()
+    }
+
+    /// Writes for a checkpoint what steps and fracture change (the model, positions,
+    /// velocities, forces, held vertices, time, the colliders' state, each vertex's contact
+    /// radius and reference mass, self contact's forgiven overlaps), between steps.
+    pub fn write_checkpoint(&self, w: &mut Writer) {
+        w.tag("shell dynamics");
+        self.model.write_checkpoint(w);
+        w.array(&self.x);
+        w.array(&self.v);
+        w.array(&self.f);
+        let pinned: Vec<u8> = self.pinned.iter().map(|&p| u8::from(p)).collect();
+        w.array(&pinned);
+        w.f64(self.elastic);
+        w.f64(self.time);
+        w.f64(self.self_energy);
+        w.u64(self.topology);
+        w.array(&self.radii);
+        w.array(&self.contact_mass);
+        w.bool(self.colliders.is_some());
+        if let Some(c) = &self.colliders {
+            c.save(w);
+        }
+        w.bool(self.self_contact.is_some());
+        if let Some(sc) = &self.self_contact {
+            sc.write_checkpoint(w);
+        }
+    }
+
+    /// Reads what [`ShellDynamics::write_checkpoint`] wrote into a shell built from the same
+    /// scene.
+    pub fn read_checkpoint(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        let invalid = |message: String| CheckpointError::Invalid {
+            what: "shell dynamics".into(),
+            message,
+        };
+        if !self.can_checkpoint() {
+            return Err(invalid(
+                "a shell stepped by Newmark keeps no checkpoint".into(),
+            ));
+        }
+        r.tag("shell dynamics")?;
+        self.model.read_checkpoint(r)?;
+        let n = self.model.mesh().num_vertices();
+        let mut pinned = Vec::<u8>::new();
+        r.array_vec("shell positions", &mut self.x)?;
+        r.array_vec("shell velocities", &mut self.v)?;
+        r.array_vec("shell forces", &mut self.f)?;
+        r.array_vec("held vertices", &mut pinned)?;
+        for (what, len) in [
+            ("positions", self.x.len()),
+            ("velocities", self.v.len()),
+            ("forces", self.f.len()),
+            ("held flags", pinned.len()),
+        ] {
+            if len != n {
+                return Err(invalid(format!("{len} {what} for {n} vertices")));
+            }
+        }
+        self.pinned = pinned.iter().map(|&p| p != 0).collect();
+        self.elastic = r.f64("elastic energy")?;
+        self.time = r.f64("time")?;
+        self.self_energy = r.f64("self-contact energy")?;
+        self.topology = r.u64("mesh changes")?;
+        r.array_vec("contact radii", &mut self.radii)?;
+        r.array_vec("contact reference masses", &mut self.contact_mass)?;
+        if r.bool("colliders")? != self.colliders.is_some() {
+            return Err(invalid(
+                "colliders where the scene has none, or none where it has".into(),
+            ));
+        }
+        if let Some(c) = &mut self.colliders {
+            if self.radii.len() != n || self.contact_mass.len() != n {
+                return Err(invalid(format!(
+                    "{} contact radii for {n} vertices",
+                    self.radii.len()
+                )));
+            }
+            c.restore(r)?;
+        }
+        self.scale_contact().map_err(|e| invalid(e.to_string()))?;
+        if r.bool("self contact")? != self.self_contact.is_some() {
+            return Err(invalid(
+                "self contact where the scene has none, or none where it has".into(),
+            ));
+        }
+        if let Some(sc) = &mut self.self_contact {
+            sc.read_checkpoint(r)?;
+        }
+        Ok(())
     }
 
     /// The largest fracture ratio at the current positions (see

@@ -24,6 +24,7 @@
 //! vertex (gathering over the edges whose stencil holds it). No locks or atomics, the same sums
 //! for any thread count, no allocation once built.
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use rayon::prelude::*;
 
 use crate::error::ShellError;
@@ -375,6 +376,88 @@ impl ShellModel {
         if let (Some(p), Some((s, phi))) = (&mut self.plastic, offsets) {
             p.s = s;
             p.phi = phi;
+        }
+        Ok(())
+    }
+
+    /// Writes for a checkpoint what fracture and plasticity change: the rest mesh, the
+    /// plastic offsets, the crack flags and where each triangle was split from. The rest of
+    /// the model is rebuilt from them ([`ShellModel::read_checkpoint`]).
+    pub fn write_checkpoint(&self, w: &mut Writer) {
+        w.tag("shell model");
+        w.array(self.mesh.vertices());
+        w.array(self.mesh.triangles());
+        w.bool(self.plastic.is_some());
+        if let Some(p) = &self.plastic {
+            w.array(&p.s);
+            w.array(&p.phi);
+        }
+        w.bool(self.fracture.is_some());
+        if let Some(f) = &self.fracture {
+            let crack: Vec<[u8; 3]> = f.crack.iter().map(|c| c.map(u8::from)).collect();
+            w.array(&crack);
+            w.array(&f.split_from);
+        }
+    }
+
+    /// Reads what [`ShellModel::write_checkpoint`] wrote into a model built by the same
+    /// settings (a checkpoint of a plastic or breaking shell does not fit one that is not).
+    pub fn read_checkpoint(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        let invalid = |message: String| CheckpointError::Invalid {
+            what: "shell model".into(),
+            message,
+        };
+        r.tag("shell model")?;
+        let (mut vertices, mut triangles) = (Vec::<Vec3>::new(), Vec::<[u32; 3]>::new());
+        r.array_vec("shell vertices", &mut vertices)?;
+        r.array_vec("shell triangles", &mut triangles)?;
+        let nt = triangles.len();
+        let plastic = r.bool("shell plastic state")?;
+        if plastic != self.plastic.is_some() {
+            return Err(invalid(
+                "plastic state where the scene has none, or none where it has".into(),
+            ));
+        }
+        let offsets = if plastic {
+            let (mut ps, mut pphi) = (Vec::new(), Vec::new());
+            r.array_vec("shell plastic strains", &mut ps)?;
+            r.array_vec("shell plastic bending", &mut pphi)?;
+            if ps.len() != nt || pphi.len() != nt {
+                return Err(invalid(format!(
+                    "{} plastic offsets for {nt} triangles",
+                    ps.len()
+                )));
+            }
+            Some((ps, pphi))
+        } else {
+            None
+        };
+        let fracture = r.bool("shell fracture state")?;
+        if fracture != self.fracture.is_some() {
+            return Err(invalid(
+                "fracture state where the scene has none, or none where it has".into(),
+            ));
+        }
+        let cracks = if fracture {
+            let (mut crack, mut split_from) = (Vec::<[u8; 3]>::new(), Vec::<u32>::new());
+            r.array_vec("shell crack flags", &mut crack)?;
+            r.array_vec("shell split origins", &mut split_from)?;
+            if crack.len() != nt || split_from.len() != nt {
+                return Err(invalid(format!(
+                    "{} crack flags for {nt} triangles",
+                    crack.len()
+                )));
+            }
+            Some((crack, split_from))
+        } else {
+            None
+        };
+        let mesh = ShellMesh::new(vertices, triangles).map_err(|e| invalid(e.to_string()))?;
+        self.rebuild(mesh, offsets)
+            .map_err(|e| invalid(e.to_string()))?;
+        if let (Some(fs), Some((crack, split_from))) = (&mut self.fracture, cracks) {
+            fs.crack = crack.iter().map(|c| c.map(|b| b != 0)).collect();
+            fs.split_from = split_from;
         }
         Ok(())
     }

@@ -7,6 +7,8 @@
 //! updated (inside its force pass), over-strained triangles break, and `k` falls by one; `k`
 //! carries over from step to step, so steps stay fine while forces keep jumping.
 
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+
 use crate::dynamics::{ShellDynamics, Snapshot};
 use crate::error::{bad_setting, ShellError};
 use crate::fracture::FractureEvent;
@@ -128,6 +130,86 @@ impl SearchedShell {
     /// The level of the next trial sub-step.
     pub fn level(&self) -> u32 {
         self.k
+    }
+
+    /// Writes the shell, the search's level, its largest force seen and its counts for a
+    /// checkpoint (between steps).
+    pub fn write_checkpoint(&self, w: &mut Writer) {
+        w.tag("shell search");
+        self.shell.write_checkpoint(w);
+        w.u64(u64::from(self.k));
+        w.f64(self.peak);
+        let st = &self.stats;
+        for n in [
+            st.substeps,
+            st.rejected,
+            st.rejected_force,
+            st.rejected_fracture,
+            st.rejected_solve,
+        ] {
+            w.u64(n);
+        }
+        let faces: Vec<u64> = st.events.iter().map(|e| e.face as u64).collect();
+        let ratios: Vec<f64> = st.events.iter().map(|e| e.ratio).collect();
+        let budged: Vec<u8> = st.events.iter().map(|e| u8::from(e.budged)).collect();
+        w.array(&faces);
+        w.array(&ratios);
+        w.array(&budged);
+    }
+
+    /// Reads what [`SearchedShell::write_checkpoint`] wrote into a search built by the same
+    /// scene.
+    pub fn read_checkpoint(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("shell search")?;
+        self.shell.read_checkpoint(r)?;
+        let k = r.u64("search level")?;
+        if k > u64::from(self.config.levels) {
+            return Err(CheckpointError::Invalid {
+                what: "shell search".into(),
+                message: format!("level {k} past the finest, {}", self.config.levels),
+            });
+        }
+        self.k = k as u32;
+        self.peak = r.f64("largest force")?;
+        let mut counts = [0u64; 5];
+        for (c, what) in counts.iter_mut().zip([
+            "sub-steps",
+            "trials undone",
+            "trials undone for force",
+            "trials undone for fracture",
+            "trials undone for a solve",
+        ]) {
+            *c = r.u64(what)?;
+        }
+        let (mut faces, mut ratios, mut budged) = (Vec::<u64>::new(), Vec::new(), Vec::<u8>::new());
+        r.array_vec("broken triangles", &mut faces)?;
+        r.array_vec("their strain ratios", &mut ratios)?;
+        r.array_vec("their budges", &mut budged)?;
+        if ratios.len() != faces.len() || budged.len() != faces.len() {
+            return Err(CheckpointError::Invalid {
+                what: "shell search".into(),
+                message: format!("{} events, {} ratios", faces.len(), ratios.len()),
+            });
+        }
+        let [substeps, rejected, rejected_force, rejected_fracture, rejected_solve] = counts;
+        self.stats = SearchStats {
+            substeps,
+            rejected,
+            rejected_force,
+            rejected_fracture,
+            rejected_solve,
+            events: faces
+                .iter()
+                .zip(&ratios)
+                .zip(&budged)
+                .map(|((&face, &ratio), &b)| FractureEvent {
+                    face: face as usize,
+                    ratio,
+                    budged: b != 0,
+                })
+                .collect(),
+        };
+        Ok(())
     }
 
     /// Covers one step of `dt` (s) by sub-steps.

@@ -15,6 +15,7 @@
 use std::time::Instant;
 
 use hashbrown::HashMap;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use rayon::prelude::*;
 
 use perifrac_physics::math::{add, cross, norm, norm_squared, scale, sub, Vec3};
@@ -248,6 +249,46 @@ impl SelfContact {
             }
         }
         self.pending = false;
+    }
+
+    /// Writes the overlaps forgiven for a checkpoint (in key order); the candidate list is
+    /// rebuilt after a restore (it is sorted: which step builds it changes no force).
+    pub(crate) fn write_checkpoint(&self, w: &mut Writer) {
+        let mut pairs: Vec<(&PairKey, &f64)> = self.forgiven.iter().collect();
+        pairs.sort_by(|a, b| a.0.cmp(b.0));
+        let kinds: Vec<u8> = pairs.iter().map(|(k, _)| u8::from(k.0)).collect();
+        let vertices: Vec<[u32; 4]> = pairs.iter().map(|(k, _)| k.1).collect();
+        let depths: Vec<f64> = pairs.iter().map(|(_, &a)| a).collect();
+        w.tag("shell self contact");
+        w.array(&kinds);
+        w.array(&vertices);
+        w.array(&depths);
+    }
+
+    /// Reads what [`SelfContact::write_checkpoint`] wrote; the next evaluation rebuilds the
+    /// candidate list.
+    pub(crate) fn read_checkpoint(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("shell self contact")?;
+        let (mut kinds, mut vertices, mut depths) = (Vec::<u8>::new(), Vec::new(), Vec::new());
+        r.array_vec("forgiven pair kinds", &mut kinds)?;
+        r.array_vec("forgiven pair vertices", &mut vertices)?;
+        r.array_vec("forgiven depths", &mut depths)?;
+        if vertices.len() != kinds.len() || depths.len() != kinds.len() {
+            return Err(CheckpointError::Invalid {
+                what: "shell self contact".into(),
+                message: format!("{} pairs, {} depths", kinds.len(), depths.len()),
+            });
+        }
+        self.forgiven = kinds
+            .iter()
+            .zip(&vertices)
+            .zip(&depths)
+            .map(|((&kind, &v), &a)| ((kind != 0, v), a))
+            .collect();
+        self.candidates.invalidate();
+        self.pending = false;
+        self.before.clear();
+        Ok(())
     }
 
     /// The overlaps forgiven (for a snapshot).

@@ -19,7 +19,7 @@ mod run;
 mod schema;
 mod setup;
 
-pub use run::{run_shell, NewmarkJson, ShellFrameJson, ShellManifest, ShellSummary};
+pub use run::{resume_shell, run_shell, NewmarkJson, ShellFrameJson, ShellManifest, ShellSummary};
 pub use schema::{
     ShellMaterialSpec, ShellOutputSpec, ShellSceneFile, ShellSimulationSpec, ShellSpec,
     TET_ONLY_KEYS,

@@ -11,8 +11,11 @@ use std::time::{Duration, Instant};
 use perifrac_io::{write_ply, write_povray_mesh2, PlyEncoding, SurfaceRef};
 use perifrac_physics::math::{cross, norm, sub};
 use perifrac_shell::output::pieces;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
+use perifrac_checkpoint::{CheckpointError, Reader};
+
+use crate::checkpoint::{Checkpoint, Position, RunIdentity, CHECKPOINT_FILE};
 use crate::error::SceneError;
 use crate::fragments::{FragmentBirth, FragmentIds};
 use crate::output::{
@@ -21,13 +24,14 @@ use crate::output::{
 };
 use crate::run::{Observer, Progress};
 use crate::setup::math::bounds;
+use crate::setup::CheckpointPolicy;
 
 use super::setup::ShellSetup;
 
 /// `run.json` of a shell run: the fields `perifrac render` reads from a tet run's
 /// ([`crate::RunManifest`]), with the shell's own counts. It holds no wall times, so two runs
 /// of one scene give identical files.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ShellManifest {
     /// [`RUN_FORMAT`].
     pub format: String,
@@ -73,7 +77,7 @@ pub struct ShellManifest {
 }
 
 /// One frame of a shell run in `run.json`; paths relative to the run directory.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ShellFrameJson {
     /// 0 is the rest state.
     pub index: usize,
@@ -117,7 +121,7 @@ pub struct ShellFrameJson {
 }
 
 /// The implicit Newmark solves of a shell run so far, in `run.json`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct NewmarkJson {
     /// Solves (discarded trials of the search included).
     pub solves: u64,
@@ -160,7 +164,9 @@ pub struct ShellSummary {
     pub physics_time: Duration,
     /// Wall time writing frames.
     pub output_time: Duration,
-    /// Triangle force updates: every sub-step and discarded trial times the triangles then.
+    /// Triangle force updates: every sub-step and discarded trial times the triangles then,
+    /// made by this process (a resumed run's earlier ones are left out, as its earlier wall
+    /// time is), so that over `physics_time` they give its rate.
     pub triangle_updates: u64,
     /// Self contact, when on: wall time (s, discarded trials included) and candidate-list
     /// builds.
@@ -175,66 +181,173 @@ pub struct ShellSummary {
 
 /// Runs a shell scene to the end, writing frames into `dir` (cleared of an earlier run's
 /// files first, as for tet runs). On an instability the frames written so far stay,
-/// `run.json` records the error and [`SceneError::ShellStopped`] is returned; an interruption
-/// the observer reports stops the run the same way (shell runs write no checkpoint).
+/// `run.json` records the error and [`SceneError::ShellStopped`] is returned. An interruption
+/// the observer reports writes a checkpoint and returns [`SceneError::Interrupted`]
+/// ([`resume_shell`] continues from it), as do frame boundaries the scene's checkpoint policy
+/// names; a run stepped by Newmark keeps no checkpoint and stops as on an instability.
 pub fn run_shell(
-    mut setup: ShellSetup,
+    setup: ShellSetup,
     dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<ShellSummary, SceneError> {
     clear_output_dir(dir)?;
+    let id = RunIdentity::of_shell(&setup);
     let mut writer = ShellWriter::start(dir, &setup)?;
+    let t = Instant::now();
+    let fragments = writer.write_frame(0, 0, &setup, false)?.fragments;
+    let stand = Stand {
+        frame: 1,
+        step_in_frame: 0,
+        steps: 0,
+        substeps: 1,
+        updates: 0,
+        fragments,
+    };
+    drive(setup, &id, writer, dir, stand, t.elapsed(), observer)
+}
+
+/// Continues the shell run in `dir` from `checkpoint` (read by [`Checkpoint::read`]); `setup`
+/// must be built from [`Checkpoint::scene`]'s shell scene with [`Checkpoint::frames`]. A
+/// checkpoint of another scene or step is refused. The files written are byte-identical to
+/// those of a run that was never interrupted.
+pub fn resume_shell(
+    mut setup: ShellSetup,
+    checkpoint: &Checkpoint,
+    dir: &Path,
+    observer: &mut dyn Observer,
+) -> Result<ShellSummary, SceneError> {
+    let id = RunIdentity::of_shell(&setup);
+    checkpoint.check_identity(dir, &id, "its frames, step or surface")?;
+    let bad = |message: String| SceneError::Checkpoint {
+        path: dir.join(CHECKPOINT_FILE),
+        message,
+    };
+    let mut r = Reader::new(checkpoint.state());
+    let mut read = || -> Result<_, CheckpointError> {
+        r.tag("shell run")?;
+        let stand = Stand {
+            frame: checkpoint.position.frame,
+            step_in_frame: checkpoint.position.step_in_frame,
+            steps: r.u64("steps")?,
+            substeps: r.u64("sub-step parts")?,
+            updates: r.u64("triangle updates")?,
+            fragments: r.usize("fragments")?,
+        };
+        let manifest = r.str("run.json")?;
+        let triangles_before = r.usize("triangles at the last frame")?;
+        let mut ids = FragmentIds::default();
+        ids.restore(&mut r, triangles_before)?;
+        setup.shell.read_checkpoint(&mut r)?;
+        r.finish()?;
+        Ok((stand, manifest, ids, triangles_before))
+    };
+    let (stand, manifest, ids, triangles_before) = read().map_err(|e| bad(e.to_string()))?;
+    let manifest: ShellManifest =
+        serde_json::from_str(&manifest).map_err(|e| bad(format!("run.json: {e}")))?;
+    let writer = ShellWriter {
+        dir: dir.to_path_buf(),
+        manifest,
+        ids,
+        triangles_before,
+    };
+    drive(setup, &id, writer, dir, stand, Duration::ZERO, observer)
+}
+
+/// Where a shell run stands between two steps, and what it has counted.
+#[derive(Debug, Clone, Copy)]
+struct Stand {
+    /// The frame being stepped towards (1-based).
+    frame: usize,
+    /// Steps already taken towards it.
+    step_in_frame: u64,
+    /// Steps taken.
+    steps: u64,
+    /// Plain steps: how many equal parts each step is cut into (more after splits shrink the
+    /// triangles).
+    substeps: u64,
+    /// Triangle force updates so far.
+    updates: u64,
+    /// Pieces at the last frame written.
+    fragments: usize,
+}
+
+/// The step loop from `stand` to the end.
+fn drive(
+    mut setup: ShellSetup,
+    id: &RunIdentity,
+    mut writer: ShellWriter,
+    dir: &Path,
+    mut stand: Stand,
+    mut output_time: Duration,
+    observer: &mut dyn Observer,
+) -> Result<ShellSummary, SceneError> {
     let total_steps = setup.steps_per_frame.saturating_mul(setup.frames as u64);
     let duration = setup.steps_per_frame as f64 * setup.info.dt * setup.frames as f64;
-    let mut steps = 0u64;
-    // Plain steps: how many equal parts each step is cut into (more after splits shrink the
-    // triangles).
-    let mut substeps = 1u64;
-    let mut updates = 0u64;
     let mut physics_time = Duration::ZERO;
-    let mut output_time = Duration::ZERO;
-    let t = Instant::now();
-    let mut fragments = writer.write_frame(0, steps, &setup, false)?.fragments;
-    output_time += t.elapsed();
-    for index in 1..=setup.frames {
-        for _ in 0..setup.steps_per_frame {
+    let updates_before = stand.updates;
+    let mut last_checkpoint = Instant::now();
+    let progress = |setup: &ShellSetup, stand: &Stand, frames_written: usize| Progress {
+        time: setup.shell.shell().time(),
+        duration,
+        steps: stand.steps,
+        total_steps,
+        broken_bonds: setup.shell.stats().events.len() as u64,
+        fragments: stand.fragments,
+        frames_written,
+    };
+    for index in stand.frame..=setup.frames {
+        let first = if index == stand.frame {
+            stand.step_in_frame
+        } else {
+            0
+        };
+        for k in first..setup.steps_per_frame {
             let t = Instant::now();
             let evaluated = evaluations(&setup);
-            let stepped = advance(&mut setup, &mut substeps);
+            let stepped = advance(&mut setup, &mut stand.substeps);
             physics_time += t.elapsed();
             let triangles = setup.shell.shell().model().mesh().triangles().len() as u64;
-            updates += (evaluations(&setup) - evaluated) * triangles;
-            let progress = Progress {
-                time: setup.shell.shell().time(),
-                duration,
-                steps,
-                total_steps,
-                broken_bonds: setup.shell.stats().events.len() as u64,
-                fragments,
-                frames_written: index,
-            };
+            stand.updates += (evaluations(&setup) - evaluated) * triangles;
             if let Err(cause) = stepped {
-                return Err(stop(&mut writer, &progress, cause.to_string()));
+                let at = progress(&setup, &stand, index);
+                return Err(stop(&mut writer, &at, cause.to_string()));
             }
-            steps += 1;
-            observer.step(&Progress { steps, ..progress });
+            stand.steps += 1;
+            observer.step(&progress(&setup, &stand, index));
             if observer.interrupted() {
-                return Err(stop(&mut writer, &progress, "interrupted".into()));
+                stand.frame = index;
+                stand.step_in_frame = k + 1;
+                return Err(interrupt(&mut writer, dir, id, &stand, &setup));
             }
         }
         let t = Instant::now();
-        let frame = writer.write_frame(index, steps, &setup, index == setup.frames)?;
+        let frame = writer.write_frame(index, stand.steps, &setup, index == setup.frames)?;
         output_time += t.elapsed();
-        fragments = frame.fragments;
-        observer.frame(&Progress {
-            time: setup.shell.shell().time(),
-            duration,
-            steps,
-            total_steps,
-            broken_bonds: setup.shell.stats().events.len() as u64,
-            fragments,
-            frames_written: index + 1,
-        });
+        stand.fragments = frame.fragments;
+        observer.frame(&progress(&setup, &stand, index + 1));
+        if index < setup.frames {
+            stand.frame = index + 1;
+            stand.step_in_frame = 0;
+            if observer.interrupted() {
+                return Err(interrupt(&mut writer, dir, id, &stand, &setup));
+            }
+            let due = setup.shell.shell().can_checkpoint()
+                && match setup.checkpoints {
+                    CheckpointPolicy::EveryFrames(n) => index % n == 0,
+                    CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
+                    CheckpointPolicy::OnInterrupt => false,
+                };
+            if due {
+                let t = Instant::now();
+                let saved = write_checkpoint(dir, id, &stand, &writer, &setup);
+                output_time += t.elapsed();
+                if let Err(e) = saved {
+                    let _ = writer.record_error(e.to_string());
+                    return Err(e);
+                }
+                last_checkpoint = Instant::now();
+            }
+        }
     }
     let usd = if let Some(layout) = setup.usd {
         let t = Instant::now();
@@ -252,13 +365,15 @@ pub fn run_shell(
     } else {
         None
     };
+    // finished: a checkpoint left from before would only resume what is done
+    let _ = std::fs::remove_file(dir.join(CHECKPOINT_FILE));
     let s = setup.shell.shell();
     Ok(ShellSummary {
-        steps,
+        steps: stand.steps,
         time: s.time(),
         dt: setup.info.dt,
         broken_triangles: setup.shell.stats().events.len(),
-        fragments,
+        fragments: stand.fragments,
         triangles: s.model().mesh().triangles().len(),
         yielded: s.model().yielded(),
         substeps: setup.shell.stats().substeps,
@@ -268,7 +383,7 @@ pub fn run_shell(
         frames_written: setup.frames + 1,
         physics_time,
         output_time,
-        triangle_updates: updates,
+        triangle_updates: stand.updates - updates_before,
         self_contact: s.self_contact().is_some().then(|| {
             let st = s.self_contact_stats();
             (st.total_seconds, st.builds)
@@ -276,6 +391,87 @@ pub fn run_shell(
         collider_seconds: s.collider_seconds(),
         newmark: setup.info.newmark.map(|_| s.newmark_stats()),
         usd,
+    })
+}
+
+/// Writes a checkpoint at `stand` (the frames recorded so far with it), records the
+/// interruption in `run.json` and returns it as the error; a Newmark run, which keeps no
+/// checkpoint, stops as on an instability.
+fn interrupt(
+    writer: &mut ShellWriter,
+    dir: &Path,
+    id: &RunIdentity,
+    stand: &Stand,
+    setup: &ShellSetup,
+) -> SceneError {
+    let time = setup.shell.shell().time();
+    if !setup.shell.shell().can_checkpoint() {
+        let at = Progress {
+            time,
+            duration: 0.0,
+            steps: stand.steps,
+            total_steps: 0,
+            broken_bonds: 0,
+            fragments: stand.fragments,
+            frames_written: writer.manifest.frames.len(),
+        };
+        return stop(
+            writer,
+            &at,
+            "interrupted (a run stepped by Newmark keeps no checkpoint)".into(),
+        );
+    }
+    let e = match write_checkpoint(dir, id, stand, writer, setup) {
+        Ok(checkpoint) => SceneError::Interrupted {
+            time,
+            step: stand.steps,
+            frames: writer.manifest.frames.len(),
+            checkpoint,
+        },
+        Err(e) => e,
+    };
+    let _ = writer.record_error(e.to_string());
+    e
+}
+
+/// Writes `dir/checkpoint.bin` atomically: the run's place (read back by
+/// [`Checkpoint::read`], as a tet run's, with no tet frames), then the shell run's counts,
+/// `run.json` as it stands, the fragment ids and the searched shell.
+fn write_checkpoint(
+    dir: &Path,
+    id: &RunIdentity,
+    stand: &Stand,
+    writer: &ShellWriter,
+    setup: &ShellSetup,
+) -> Result<PathBuf, SceneError> {
+    let manifest = serde_json::to_string(&writer.manifest).map_err(|e| SceneError::Output {
+        dir: dir.to_path_buf(),
+        message: format!("cannot encode run.json for the checkpoint: {e}"),
+    })?;
+    let position = Position {
+        frame: stand.frame,
+        step_in_frame: stand.step_in_frame,
+    };
+    let summary = format!(
+        "{} at step {} (t = {:.6e} s), stepping to frame {} of {}",
+        id.scene_path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        stand.steps,
+        setup.shell.shell().time(),
+        stand.frame,
+        id.frames
+    );
+    crate::checkpoint::write_with(dir, id, position, &[], summary, |w| {
+        w.tag("shell run");
+        w.u64(stand.steps);
+        w.u64(stand.substeps);
+        w.u64(stand.updates);
+        w.usize(stand.fragments);
+        w.str(&manifest);
+        w.usize(writer.triangles_before);
+        writer.ids.save(w);
+        setup.shell.write_checkpoint(w);
     })
 }
 

@@ -169,6 +169,10 @@ pub struct ShellOutputSpec {
     pub usd_pieces: Option<bool>,
     /// Playback frames per second of the USD cache (default 24).
     pub fps: Option<f64>,
+    /// Write `checkpoint.bin` after every N frames (0: only when interrupted; default: at the
+    /// first frame that ends 5 minutes of wall time or more after the last checkpoint).
+    /// Explicit runs only: a Newmark run keeps no checkpoint.
+    pub checkpoint_every: Option<usize>,
 }
 
 /// Keys that tet scenes take and shell scenes do not, as `table.key` (`table` alone for a
@@ -245,10 +249,6 @@ pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
     ("material.anisotropy", "shells are isotropic"),
     ("material.axes", "shells are isotropic"),
     ("output.particles", "a shell has no particles"),
-    (
-        "output.checkpoint_every",
-        "shell runs write no checkpoints yet",
-    ),
     (
         "output.smooth_cracks",
         "shell cracks are straight segments across triangles already",

@@ -17,6 +17,7 @@ use crate::setup::colliders::build_colliders;
 use crate::setup::loads::{initial_velocities, select};
 use crate::setup::math::{bounds, up_from_gravity};
 use crate::setup::step::fit_to_frames;
+use crate::setup::{CheckpointPolicy, DEFAULT_CHECKPOINT_SECONDS};
 
 use super::schema::{ShellSceneFile, ShellSpec, TET_ONLY_KEYS};
 
@@ -178,6 +179,9 @@ pub struct ShellSetup {
     pub usd: Option<crate::usd::UsdLayout>,
     /// Playback frames per second of that cache.
     pub fps: f64,
+    /// When the run writes a checkpoint at a frame boundary (explicit runs; an interrupted
+    /// one always writes one).
+    pub checkpoints: crate::setup::CheckpointPolicy,
     /// What was found and chosen.
     pub info: ShellSetupInfo,
 }
@@ -331,6 +335,18 @@ impl ShellSetup {
         }
         let material = shell_material(&ctx, f)?;
         let thickness = material.thickness;
+        let checkpoints = match (f.output.checkpoint_every, newmark.is_some()) {
+            (Some(_), true) => {
+                return Err(ctx.err(
+                    "output.checkpoint_every",
+                    "a shell run stepped by Newmark keeps no checkpoint (its factored step \
+                     matrices depend on where they were built); leave the key out",
+                ))
+            }
+            (None, _) => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
+            (Some(0), _) => CheckpointPolicy::OnInterrupt,
+            (Some(n), _) => CheckpointPolicy::EveryFrames(n),
+        };
         let frame_thickness = match f.output.thickness {
             Some(t) => ctx.non_negative("output.thickness", t)?,
             None => thickness,
@@ -507,6 +523,7 @@ impl ShellSetup {
             frame_thickness,
             usd: crate::usd::UsdLayout::from_keys(f.output.usd, f.output.usd_pieces),
             fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
+            checkpoints,
             info,
         })
     }
