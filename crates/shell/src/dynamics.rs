@@ -504,7 +504,7 @@ impl ShellDynamics {
         }
         if self.newmark.is_some() {
             self.newmark_step(dt)?;
-            self.regrow_radii();
+            self.regrow_bands();
             return Ok(());
         }
         self.kick(0.5 * dt);
@@ -527,7 +527,7 @@ impl ShellDynamics {
         self.add_self_contact()?;
         self.kick(0.5 * dt);
         self.time += dt;
-        self.regrow_radii();
+        self.regrow_bands();
         if !(self.elastic.is_finite() && self.self_energy.is_finite()) {
             return Err(ShellError::RanAway { time: self.time });
         }
@@ -619,26 +619,48 @@ impl ShellDynamics {
     /// lies inside the ball by the chord's sagitta (0.56 mm for an 8.3 mm edge round the
     /// punctured sheet's ball); pushed out to the allowed depth, its triangles took the
     /// sagitta as strain (0.2 J, against 1e-6 J in the whole sheet), and under the penalty
-    /// the overlap's energy shot it out. Only when the radius would fall below half the
-    /// smallest ball's (a depth no chord reaches) is the rest pushed out.
+    /// the overlap's energy shot it out. Only when the radius would fall below minus half the
+    /// smallest ball's (a depth no chord reaches; 0 under Newmark, whose implicit contact
+    /// takes no negative radius) is the rest pushed out, and a held vertex never.
     fn forgive_overlaps(&mut self) {
         let Some(c) = &self.colliders else {
             return;
         };
-        let floor = c.balls().map(|b| -0.5 * b.radius).fold(0.0f64, f64::min);
-        for ((p, r), &allowed) in self.x.iter_mut().zip(&mut self.radii).zip(&self.depths) {
+        // The implicit contact takes no negative radius; the explicit one no reach past a
+        // ball's centre.
+        let floor = match (
+            self.newmark.is_some(),
+            c.balls().map(|b| b.radius).reduce(f64::min),
+        ) {
+            (false, Some(smallest)) => -0.5 * smallest,
+            _ => 0.0,
+        };
+        let held = &self.pinned;
+        for (((p, r), &allowed), &held) in self
+            .x
+            .iter_mut()
+            .zip(&mut self.radii)
+            .zip(&self.depths)
+            .zip(held)
+        {
             let excess = c.penetration(*p, *r) - allowed;
             if excess > 0.0 {
                 *r = (*r - excess).max(floor);
-                *p = c.push_out(*p, *r, allowed);
+                if !held {
+                    *p = c.push_out(*p, *r, allowed);
+                }
             }
         }
     }
 
-    /// Grows the contact radii that [`Self::forgive_overlaps`] shrank back towards the full
-    /// radius as far as each vertex's clearance from every collider allows (so no contact
-    /// starts deeper than it was), after a step.
-    fn regrow_radii(&mut self) {
+    /// After a step: grows the contact radii that [`Self::forgive_overlaps`] shrank back
+    /// towards the full radius as far as each vertex's clearance from every collider allows
+    /// (so no contact starts deeper than it was), and self contact's forgiven bands likewise
+    /// ([`SelfContact::regrow`]).
+    fn regrow_bands(&mut self) {
+        if let Some(sc) = &mut self.self_contact {
+            sc.regrow();
+        }
         let Some(c) = &self.colliders else {
             return;
         };

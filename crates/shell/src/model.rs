@@ -448,6 +448,20 @@ impl ShellModel {
                     crack.len()
                 )));
             }
+            // The setup's triangles are their own origin; a split appends, so every other
+            // triangle's origin is a lower index ([`ShellModel::part_of`] walks down them).
+            let original = self.split_from().len();
+            let bad = split_from.iter().enumerate().find(|&(t, &f)| {
+                let f = f as usize;
+                if t < original {
+                    f != t
+                } else {
+                    f >= t
+                }
+            });
+            if let Some((t, f)) = bad {
+                return Err(invalid(format!("triangle {t} split from {f}")));
+            }
             Some((crack, split_from))
         } else {
             None
