@@ -32,7 +32,7 @@ pub(crate) struct Snapshot {
     acc: Vec<Vec3>,
     /// The contact radii (a step regrows forgiven ones).
     radii: Vec<f64>,
-    /// Self-contact's forgiven overlaps (an evaluation regrows them).
+    /// Self-contact's forgiven overlaps (a step regrows them).
     forgiven: HashMap<PairKey, f64>,
     /// The colliders' moving state (balls).
     colliders: Writer,

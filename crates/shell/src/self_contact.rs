@@ -165,8 +165,8 @@ pub struct SelfContact {
     /// Vertex-triangle pairs at the head of `slots` in the last evaluation.
     vertex_faces: usize,
     /// Overlaps a mesh edit created, forgiven: per pair the depth (m) its band is shrunk by,
-    /// shrinking to what the pair's distance allows at each evaluation (see
-    /// [`SelfContact::begin_edit`]).
+    /// shrinking to what the pair's distance allows after each step (see
+    /// [`SelfContact::begin_edit`], [`SelfContact::regrow`]).
     forgiven: HashMap<PairKey, f64>,
     /// Each pair's depth in its band (m) just before the last [`SelfContact::begin_edit`].
     before: HashMap<PairKey, f64>,

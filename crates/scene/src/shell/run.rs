@@ -230,7 +230,7 @@ pub fn resume_shell(
             step_in_frame: checkpoint.position.step_in_frame,
             steps: r.u64("steps")?,
             substeps: r.u64("sub-step parts")?,
-            updates: r.u64("triangle updates")?,
+            updates: 0,
             fragments: r.usize("fragments")?,
         };
         let manifest = r.str("run.json")?;
@@ -265,7 +265,7 @@ struct Stand {
     /// Plain steps: how many equal parts each step is cut into (more after splits shrink the
     /// triangles).
     substeps: u64,
-    /// Triangle force updates so far.
+    /// Triangle force updates by this process (not kept in checkpoints).
     updates: u64,
     /// Pieces at the last frame written.
     fragments: usize,
@@ -284,7 +284,6 @@ fn drive(
     let total_steps = setup.steps_per_frame.saturating_mul(setup.frames as u64);
     let duration = setup.steps_per_frame as f64 * setup.info.dt * setup.frames as f64;
     let mut physics_time = Duration::ZERO;
-    let updates_before = stand.updates;
     let mut last_checkpoint = Instant::now();
     let progress = |setup: &ShellSetup, stand: &Stand, frames_written: usize| Progress {
         time: setup.shell.shell().time(),
@@ -383,7 +382,7 @@ fn drive(
         frames_written: setup.frames + 1,
         physics_time,
         output_time,
-        triangle_updates: stand.updates - updates_before,
+        triangle_updates: stand.updates,
         self_contact: s.self_contact().is_some().then(|| {
             let st = s.self_contact_stats();
             (st.total_seconds, st.builds)
@@ -466,7 +465,6 @@ fn write_checkpoint(
         w.tag("shell run");
         w.u64(stand.steps);
         w.u64(stand.substeps);
-        w.u64(stand.updates);
         w.usize(stand.fragments);
         w.str(&manifest);
         w.usize(writer.triangles_before);
