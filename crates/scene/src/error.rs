@@ -99,8 +99,7 @@ pub enum SceneError {
         /// The checkpoint written.
         checkpoint: PathBuf,
     },
-    /// A shell run stopped (an instability, or an interruption of a run stepped by Newmark,
-    /// which keeps no checkpoint); the frames written so far are kept.
+    /// A shell run stopped on an instability; the frames written so far are kept.
     #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
     ShellStopped {
         /// Simulated time (s).

@@ -32,10 +32,19 @@ pub(crate) struct BlockMatrix {
     row_idx: Vec<u32>,
     values: Vec<f64>,
     symbolic: SymbolicCholesky<u32>,
-    /// Numeric factors kept by key (the step they were made for, s), and the one in use.
-    factors: Vec<(f64, Vec<f64>)>,
+    /// Numeric factors kept by key (the step they were made for, s), each with the matrix it
+    /// was made from, and the one in use.
+    factors: Vec<Kept>,
     active: Option<usize>,
     buffer: MemBuffer,
+}
+
+/// A factor kept under its key, with the assembled values it was made from (a checkpoint
+/// keeps those, a fraction of the factor's size, and factors them again to the same bits).
+struct Kept {
+    key: f64,
+    factor: Vec<f64>,
+    values: Vec<f64>,
 }
 
 impl std::fmt::Debug for BlockMatrix {
@@ -196,7 +205,7 @@ impl BlockMatrix {
 
     /// Solves with the factor kept under `key` from now on, if there is one.
     pub fn use_factor(&mut self, key: f64) -> bool {
-        self.active = self.factors.iter().position(|(k, _)| *k == key);
+        self.active = self.factors.iter().position(|k| k.key == key);
         self.active.is_some()
     }
 
@@ -209,13 +218,18 @@ impl BlockMatrix {
     /// Factors the assembled matrix, keeps the factor under `key` (replacing one kept under it)
     /// and solves with it from now on.
     pub fn factor(&mut self, key: f64) -> Result<(), ShellError> {
-        let slot = match self.factors.iter().position(|(k, _)| *k == key) {
+        let slot = match self.factors.iter().position(|k| k.key == key) {
             Some(i) => i,
             None => {
-                self.factors.push((key, vec![0.0; self.symbolic.len_val()]));
+                self.factors.push(Kept {
+                    key,
+                    factor: vec![0.0; self.symbolic.len_val()],
+                    values: vec![0.0; self.values.len()],
+                });
                 self.factors.len() - 1
             }
         };
+        self.factors[slot].values.copy_from_slice(&self.values);
         self.active = None;
         let n = 3 * self.len();
         let a = SparseColMatRef::new(
@@ -224,7 +238,7 @@ impl BlockMatrix {
         );
         self.symbolic
             .factorize_numeric_llt::<f64>(
-                &mut self.factors[slot].1,
+                &mut self.factors[slot].factor,
                 a,
                 Side::Lower,
                 LltRegularization::default(),
@@ -237,6 +251,33 @@ impl BlockMatrix {
         Ok(())
     }
 
+    /// The factors kept: each one's key (the step it was made for, s) and the assembled
+    /// values it was made from, in the order they were made.
+    pub fn kept(&self) -> impl Iterator<Item = (f64, &[f64])> {
+        self.factors.iter().map(|k| (k.key, k.values.as_slice()))
+    }
+
+    /// Factors each of `kept` (keys and assembled values written by [`BlockMatrix::kept`] for a
+    /// matrix of the same pattern) and keeps it in place of any kept, so the factors have the
+    /// bits they had; none is in use until [`BlockMatrix::use_factor`]. Refuses values whose
+    /// length is not this pattern's, and a matrix that does not factor.
+    pub fn refactor_kept(&mut self, kept: &[(f64, Vec<f64>)]) -> Result<(), ShellError> {
+        self.forget();
+        for (key, values) in kept {
+            if values.len() != self.values.len() {
+                return Err(ShellError::Factorization(format!(
+                    "{} matrix entries for step {key} s, this pattern has {}",
+                    values.len(),
+                    self.values.len()
+                )));
+            }
+            self.values.copy_from_slice(values);
+            self.factor(*key)?;
+        }
+        self.active = None;
+        Ok(())
+    }
+
     /// Solves in place for `rhs` (`3 x` free vertices, vertex-major) with the factor in use;
     /// leaves `rhs` as it is when there is none.
     pub fn solve(&mut self, rhs: &mut [f64]) {
@@ -244,7 +285,7 @@ impl BlockMatrix {
             return;
         };
         let n = 3 * self.len();
-        let llt = LltRef::<'_, u32, f64>::new(&self.symbolic, &self.factors[active].1);
+        let llt = LltRef::<'_, u32, f64>::new(&self.symbolic, &self.factors[active].factor);
         llt.solve_in_place_with_conj(
             Conj::No,
             MatMut::from_column_major_slice_mut(&mut rhs[..n], n, 1),

@@ -165,15 +165,10 @@ impl ShellDynamics {
         }
     }
 
-    /// Whether [`ShellDynamics::write_checkpoint`] keeps everything a step needs: not for
-    /// Newmark, whose factored step matrices depend on where they were built.
-    pub fn can_checkpoint(&self) -> bool {
-        self.newmark.is_none()
-    }
-
     /// Writes for a checkpoint what steps and fracture change (the model, positions,
     /// velocities, forces, held vertices, time, the colliders' state, each vertex's contact
-    /// radius and reference mass, self contact's forgiven overlaps), between steps.
+    /// radius and reference mass, self contact's forgiven overlaps, and under Newmark its
+    /// accelerations, counts and kept factors of the step matrix), between steps.
     pub fn write_checkpoint(&self, w: &mut Writer) {
         w.tag("shell dynamics");
         self.model.write_checkpoint(w);
@@ -196,6 +191,10 @@ impl ShellDynamics {
         if let Some(sc) = &self.self_contact {
             sc.write_checkpoint(w);
         }
+        w.bool(self.newmark.is_some());
+        if let Some(nm) = &self.newmark {
+            nm.write_checkpoint(w, self.topology, &self.pinned);
+        }
     }
 
     /// Reads what [`ShellDynamics::write_checkpoint`] wrote into a shell built from the same
@@ -205,11 +204,6 @@ impl ShellDynamics {
             what: "shell dynamics".into(),
             message,
         };
-        if !self.can_checkpoint() {
-            return Err(invalid(
-                "a shell stepped by Newmark keeps no checkpoint".into(),
-            ));
-        }
         r.tag("shell dynamics")?;
         self.model.read_checkpoint(r)?;
         let n = self.model.mesh().num_vertices();
@@ -257,6 +251,14 @@ impl ShellDynamics {
         }
         if let Some(sc) = &mut self.self_contact {
             sc.read_checkpoint(r)?;
+        }
+        if r.bool("Newmark stepping")? != self.newmark.is_some() {
+            return Err(invalid(
+                "stepped by Newmark where the scene steps explicitly, or the other way".into(),
+            ));
+        }
+        if let Some(nm) = &mut self.newmark {
+            nm.read_checkpoint(r, self.model.mesh(), self.topology, &self.pinned)?;
         }
         Ok(())
     }

@@ -184,7 +184,7 @@ pub struct ShellSummary {
 /// `run.json` records the error and [`SceneError::ShellStopped`] is returned. An interruption
 /// the observer reports writes a checkpoint and returns [`SceneError::Interrupted`]
 /// ([`resume_shell`] continues from it), as do frame boundaries the scene's checkpoint policy
-/// names; a run stepped by Newmark keeps no checkpoint and stops as on an instability.
+/// names.
 pub fn run_shell(
     setup: ShellSetup,
     dir: &Path,
@@ -330,12 +330,11 @@ fn drive(
             if observer.interrupted() {
                 return Err(interrupt(&mut writer, dir, id, &stand, &setup));
             }
-            let due = setup.shell.shell().can_checkpoint()
-                && match setup.checkpoints {
-                    CheckpointPolicy::EveryFrames(n) => index % n == 0,
-                    CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
-                    CheckpointPolicy::OnInterrupt => false,
-                };
+            let due = match setup.checkpoints {
+                CheckpointPolicy::EveryFrames(n) => index % n == 0,
+                CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
+                CheckpointPolicy::OnInterrupt => false,
+            };
             if due {
                 let t = Instant::now();
                 let saved = write_checkpoint(dir, id, &stand, &writer, &setup);
@@ -394,8 +393,7 @@ fn drive(
 }
 
 /// Writes a checkpoint at `stand` (the frames recorded so far with it), records the
-/// interruption in `run.json` and returns it as the error; a Newmark run, which keeps no
-/// checkpoint, stops as on an instability.
+/// interruption in `run.json` and returns it as the error.
 fn interrupt(
     writer: &mut ShellWriter,
     dir: &Path,
@@ -404,22 +402,6 @@ fn interrupt(
     setup: &ShellSetup,
 ) -> SceneError {
     let time = setup.shell.shell().time();
-    if !setup.shell.shell().can_checkpoint() {
-        let at = Progress {
-            time,
-            duration: 0.0,
-            steps: stand.steps,
-            total_steps: 0,
-            broken_bonds: 0,
-            fragments: stand.fragments,
-            frames_written: writer.manifest.frames.len(),
-        };
-        return stop(
-            writer,
-            &at,
-            "interrupted (a run stepped by Newmark keeps no checkpoint)".into(),
-        );
-    }
     let e = match write_checkpoint(dir, id, stand, writer, setup) {
         Ok(checkpoint) => SceneError::Interrupted {
             time,

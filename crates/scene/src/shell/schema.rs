@@ -171,7 +171,6 @@ pub struct ShellOutputSpec {
     pub fps: Option<f64>,
     /// Write `checkpoint.bin` after every N frames (0: only when interrupted; default: at the
     /// first frame that ends 5 minutes of wall time or more after the last checkpoint).
-    /// Explicit runs only: a Newmark run keeps no checkpoint.
     pub checkpoint_every: Option<usize>,
 }
 

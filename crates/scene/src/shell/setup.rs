@@ -335,17 +335,10 @@ impl ShellSetup {
         }
         let material = shell_material(&ctx, f)?;
         let thickness = material.thickness;
-        let checkpoints = match (f.output.checkpoint_every, newmark.is_some()) {
-            (Some(_), true) => {
-                return Err(ctx.err(
-                    "output.checkpoint_every",
-                    "a shell run stepped by Newmark keeps no checkpoint (its factored step \
-                     matrices depend on where they were built); leave the key out",
-                ))
-            }
-            (None, _) => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
-            (Some(0), _) => CheckpointPolicy::OnInterrupt,
-            (Some(n), _) => CheckpointPolicy::EveryFrames(n),
+        let checkpoints = match f.output.checkpoint_every {
+            None => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
+            Some(0) => CheckpointPolicy::OnInterrupt,
+            Some(n) => CheckpointPolicy::EveryFrames(n),
         };
         let frame_thickness = match f.output.thickness {
             Some(t) => ctx.non_negative("output.thickness", t)?,

@@ -26,6 +26,8 @@ use std::time::Instant;
 use super::ShellDynamics;
 use crate::block_matrix::BlockMatrix;
 use crate::error::{bad_setting, ShellError};
+use crate::mesh::ShellMesh;
+use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use perifrac_physics::math::{axpy, dot, scale, sub, Vec3};
 
 /// Settings of the implicit Newmark step.
@@ -163,6 +165,115 @@ impl Newmark {
 
     pub(crate) fn config(&self) -> NewmarkConfig {
         self.config
+    }
+
+    /// Writes for a checkpoint what later steps read: the counts (not the factorisations'
+    /// wall time), the last solve's iterations and cap, the search's trial cap, the
+    /// accelerations, and the step matrix as each kept factor was made from it, when the matrix
+    /// is the one the next step would use (made for the mesh changes `topology` and the held
+    /// set `held`; a stale one is rebuilt at the next step whether or not the run was resumed).
+    /// Each was assembled at the positions and contact state of some earlier step, so it is
+    /// kept, not assembled again.
+    pub(crate) fn write_checkpoint(&self, w: &mut Writer, topology: u64, held: &[bool]) {
+        w.tag("newmark");
+        let st = &self.stats;
+        for n in [
+            st.steps,
+            st.iterations,
+            st.capped,
+            st.stalled,
+            st.factorizations,
+            st.diagonal_only,
+        ] {
+            w.u64(n);
+        }
+        w.usize(self.last_iterations);
+        w.bool(self.last_capped);
+        w.bool(self.trial_cap.is_some());
+        w.usize(self.trial_cap.unwrap_or(0));
+        w.array(&self.acc);
+        let current = self
+            .matrix
+            .as_ref()
+            .filter(|m| self.topology == Some(topology) && m.matches(held));
+        w.bool(current.is_some());
+        if let Some(m) = current {
+            w.usize(m.kept().count());
+            for (key, values) in m.kept() {
+                w.f64(key);
+                w.array(values);
+            }
+        }
+    }
+
+    /// Reads what [`Newmark::write_checkpoint`] wrote, the mesh, mesh changes and held set
+    /// already read; the step matrix's pattern is rebuilt from them and each kept matrix
+    /// factored again (the same values factor to the same bits).
+    pub(crate) fn read_checkpoint(
+        &mut self,
+        r: &mut Reader,
+        mesh: &ShellMesh,
+        topology: u64,
+        held: &[bool],
+    ) -> Result<(), CheckpointError> {
+        let invalid = |message: String| CheckpointError::Invalid {
+            what: "Newmark stepping".into(),
+            message,
+        };
+        r.tag("newmark")?;
+        let mut counts = [0u64; 6];
+        for (c, what) in counts.iter_mut().zip([
+            "implicit solves",
+            "L-BFGS iterations",
+            "capped solves",
+            "stalled solves",
+            "factorisations",
+            "diagonal-only factorisations",
+        ]) {
+            *c = r.u64(what)?;
+        }
+        let [steps, iterations, capped, stalled, factorizations, diagonal_only] = counts;
+        self.stats = NewmarkStats {
+            steps,
+            iterations,
+            capped,
+            stalled,
+            factorizations,
+            factor_seconds: 0.0,
+            diagonal_only,
+        };
+        self.last_iterations = r.usize("the last solve's iterations")?;
+        self.last_capped = r.bool("whether the last solve was capped")?;
+        let has_cap = r.bool("trial cap")?;
+        let cap = r.usize("trial cap")?;
+        self.trial_cap = has_cap.then_some(cap);
+        r.array_vec("accelerations", &mut self.acc)?;
+        if !self.acc.is_empty() && self.acc.len() != mesh.num_vertices() {
+            return Err(invalid(format!(
+                "{} accelerations for {} vertices",
+                self.acc.len(),
+                mesh.num_vertices()
+            )));
+        }
+        self.matrix = None;
+        self.topology = None;
+        if r.bool("step matrix")? {
+            let count = r.usize("kept factors")?;
+            let mut kept = Vec::new();
+            for _ in 0..count {
+                let key = r.f64("factor's step")?;
+                let mut values = Vec::new();
+                r.array_vec("step matrix", &mut values)?;
+                kept.push((key, values));
+            }
+            let mut matrix = BlockMatrix::new(mesh, held).map_err(|e| invalid(e.to_string()))?;
+            matrix
+                .refactor_kept(&kept)
+                .map_err(|e| invalid(e.to_string()))?;
+            self.matrix = Some(matrix);
+            self.topology = Some(topology);
+        }
+        Ok(())
     }
 
     /// Spreads the unknowns `q`, or the trial point `qt` (`trial`), over the positions `y` of
