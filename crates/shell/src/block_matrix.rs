@@ -236,17 +236,22 @@ impl BlockMatrix {
             SymbolicSparseColMatRef::new_checked(n, n, &self.col_ptr, None, &self.row_idx),
             &self.values,
         );
-        self.symbolic
-            .factorize_numeric_llt::<f64>(
-                &mut self.factors[slot].factor,
-                a,
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut self.buffer),
-                Default::default(),
-            )
-            .map_err(|e| ShellError::Factorization(format!("not positive definite ({e:?})")))?;
+        let made = self.symbolic.factorize_numeric_llt::<f64>(
+            &mut self.factors[slot].factor,
+            a,
+            Side::Lower,
+            LltRegularization::default(),
+            Par::Seq,
+            MemStack::new(&mut self.buffer),
+            Default::default(),
+        );
+        if let Err(e) = made {
+            // a half-made factor must not be found under its key later
+            self.factors.remove(slot);
+            return Err(ShellError::Factorization(format!(
+                "not positive definite ({e:?})"
+            )));
+        }
         self.active = Some(slot);
         Ok(())
     }

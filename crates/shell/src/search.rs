@@ -85,7 +85,7 @@ pub struct SearchStats {
     pub events: Vec<FractureEvent>,
 }
 
-/// An explicit shell stepped by the search: the shell, the settings, the current level and the
+/// A shell (stepped explicitly or by Newmark) under the search: the shell, the settings, the current level and the
 /// largest force seen.
 #[derive(Debug, Clone)]
 pub struct SearchedShell {

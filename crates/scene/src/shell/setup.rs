@@ -179,8 +179,8 @@ pub struct ShellSetup {
     pub usd: Option<crate::usd::UsdLayout>,
     /// Playback frames per second of that cache.
     pub fps: f64,
-    /// When the run writes a checkpoint at a frame boundary (explicit runs; an interrupted
-    /// one always writes one).
+    /// When the run writes a checkpoint at a frame boundary (an interrupted run always writes
+    /// one).
     pub checkpoints: crate::setup::CheckpointPolicy,
     /// What was found and chosen.
     pub info: ShellSetupInfo,

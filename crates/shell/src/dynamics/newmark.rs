@@ -142,7 +142,9 @@ pub(crate) struct Newmark {
     alpha: Vec<f64>,
 }
 
-/// A copy keeps the settings, counts and accelerations; the matrix is rebuilt at its next step.
+/// A copy keeps the settings, counts and accelerations; the matrix is rebuilt at its next step,
+/// so a copy of a shell already stepped solves from another matrix and can differ from the
+/// original in the last bits (a checkpoint keeps the matrices: [`Newmark::write_checkpoint`]).
 impl Clone for Newmark {
     fn clone(&self) -> Self {
         Newmark {
@@ -167,8 +169,8 @@ impl Newmark {
         self.config
     }
 
-    /// Writes for a checkpoint what later steps read: the counts (not the factorisations'
-    /// wall time), the last solve's iterations and cap, the search's trial cap, the
+    /// Writes for a checkpoint what later steps read: the counts and the factorisations' wall
+    /// time, the last solve's iterations and cap, the search's trial cap, the
     /// accelerations, and the step matrix as each kept factor was made from it, when the matrix
     /// is the one the next step would use (made for the mesh changes `topology` and the held
     /// set `held`; a stale one is rebuilt at the next step whether or not the run was resumed).
@@ -187,15 +189,19 @@ impl Newmark {
         ] {
             w.u64(n);
         }
+        w.f64(st.factor_seconds);
         w.usize(self.last_iterations);
         w.bool(self.last_capped);
         w.bool(self.trial_cap.is_some());
         w.usize(self.trial_cap.unwrap_or(0));
         w.array(&self.acc);
-        let current = self
-            .matrix
-            .as_ref()
-            .filter(|m| self.topology == Some(topology) && m.matches(held));
+        // The matrix the next step will use: one made for another mesh or held set is rebuilt
+        // there, and after a long solve every kept factor is dropped.
+        let current = self.matrix.as_ref().filter(|m| {
+            self.topology == Some(topology)
+                && m.matches(held)
+                && self.last_iterations <= REFACTOR_ITERATIONS
+        });
         w.bool(current.is_some());
         if let Some(m) = current {
             w.usize(m.kept().count());
@@ -239,7 +245,7 @@ impl Newmark {
             capped,
             stalled,
             factorizations,
-            factor_seconds: 0.0,
+            factor_seconds: r.f64("factorisation time")?,
             diagonal_only,
         };
         self.last_iterations = r.usize("the last solve's iterations")?;
@@ -262,6 +268,9 @@ impl Newmark {
             let mut kept = Vec::new();
             for _ in 0..count {
                 let key = r.f64("factor's step")?;
+                if !(key.is_finite() && key > 0.0) {
+                    return Err(invalid(format!("a factor kept for a step of {key} s")));
+                }
                 let mut values = Vec::new();
                 r.array_vec("step matrix", &mut values)?;
                 kept.push((key, values));
