@@ -177,11 +177,20 @@ fn no_stability_case_ends_in_a_nan_or_a_panic() {
 #[test]
 fn speed_tables_hold_positive_rates() {
     let t = speed::paths(Effort::Tiny, &mut |_| {}).unwrap();
-    assert_eq!(t.rows.len(), 5);
+    // five material paths with the scalar calibration, then the same five fitted
+    assert_eq!(t.rows.len(), 10);
     for row in &t.rows {
-        let rate: f64 = row[4].parse().unwrap();
-        let bytes: f64 = row[7].parse().unwrap();
+        let rate: f64 = row[5].parse().unwrap();
+        let bytes: f64 = row[8].parse().unwrap();
         assert!(rate > 0.0 && bytes > 8.0, "{row:?}");
+    }
+    for (cal, fit) in t.rows[..5].iter().zip(&t.rows[5..]) {
+        assert_eq!((cal[0].as_str(), cal[1].as_str()), (fit[0].as_str(), "calibrated"));
+        assert_eq!(fit[1], "fitted (default)");
+        // the fit keeps each bond's weight and its reverse's (16 bytes a bond); its per-particle
+        // arrays add under 0.5 byte a bond at this block's 112 bonds a particle
+        let extra = fit[8].parse::<f64>().unwrap() - cal[8].parse::<f64>().unwrap();
+        assert!((15.9..16.5).contains(&extra), "{cal:?} {fit:?}");
     }
     let share = speed::fracture_share(Effort::Tiny, &mut |_| {}).unwrap();
     let broken: u64 = share.rows[0][2].parse().unwrap();
