@@ -185,7 +185,10 @@ fn speed_tables_hold_positive_rates() {
         assert!(rate > 0.0 && bytes > 8.0, "{row:?}");
     }
     for (cal, fit) in t.rows[..5].iter().zip(&t.rows[5..]) {
-        assert_eq!((cal[0].as_str(), cal[1].as_str()), (fit[0].as_str(), "calibrated"));
+        assert_eq!(
+            (cal[0].as_str(), cal[1].as_str()),
+            (fit[0].as_str(), "calibrated")
+        );
         assert_eq!(fit[1], "fitted (default)");
         // the fit keeps each bond's weight and its reverse's (16 bytes a bond); its per-particle
         // arrays add under 0.5 byte a bond at this block's 112 bonds a particle

@@ -110,9 +110,12 @@ pub struct ChenModel {
     /// A lower bound on every plastic extension (m, at most 0): the least ever stored, which
     /// lets the damage check pass over bonds far from breaking without loading theirs.
     ep_floor: f64,
-    /// Per particle `[theta_i, S_i, least extension changed]` of a plastic step's first pass,
-    /// only when plastic.
-    first_pass: Vec<[f64; 3]>,
+    /// Per particle `[theta_i, S_i, least extension changed, 1 if any changed]` of a plastic
+    /// step's first pass, only when plastic.
+    first_pass: Vec<[f64; 4]>,
+    /// Per particle, whether the last first pass changed any of its own ends' extensions (the
+    /// force pass maps the other end of a bond only then), only when plastic.
+    changed: Vec<bool>,
     damage: Option<Damage>,
     /// Per particle `(theta_i, S_i)` from the last dilatation pass.
     ts: Vec<[f64; 2]>,
@@ -333,10 +336,10 @@ impl ChenModel {
             Damage::new(fam, s_crit, alpha)
         });
         let ep = plastic.then(|| vec![[0.0; 2]; fam.num_bonds()]);
-        let first_pass = if plastic {
-            vec![[0.0; 3]; n]
+        let (first_pass, changed) = if plastic {
+            (vec![[0.0; 4]; n], vec![true; n])
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
         Ok(ChenModel {
             setup: Setup {
@@ -355,6 +358,7 @@ impl ChenModel {
             ep,
             ep_floor: 0.0,
             first_pass,
+            changed,
             damage,
             ts: vec![[0.0; 2]; n],
             pq: vec![[0.0; 2]; n],
@@ -495,7 +499,7 @@ impl ChenModel {
         let inp = s.inputs(y);
         let offsets = inp.family.offsets();
         with_wd!(s, self.damage.as_ref(), |w, d| {
-            let body = |first: usize, out: &mut [[f64; 3]], ep: &mut [[f64; 2]]| {
+            let body = |first: usize, out: &mut [[f64; 4]], ep: &mut [[f64; 2]]| {
                 let base = offsets[first] as usize;
                 with_row_buffer(|buf| {
                     for (o, t) in out.iter_mut().enumerate() {
@@ -513,8 +517,14 @@ impl ChenModel {
 
     /// `ts` and the floor from the first pass of a plastic step, then `pq`.
     fn finish_first_pass(&mut self) {
-        for (t, &[theta, moment, least]) in self.ts.iter_mut().zip(&self.first_pass) {
+        for ((t, c), &[theta, moment, least, changed]) in self
+            .ts
+            .iter_mut()
+            .zip(&mut self.changed)
+            .zip(&self.first_pass)
+        {
             *t = [theta, moment];
+            *c = changed != 0.0;
             self.ep_floor = self.ep_floor.min(least);
         }
         self.pressure_pass();
@@ -610,7 +620,7 @@ impl ChenModel {
             return;
         };
         let inp = s.inputs(y);
-        let (pq, ts) = (&self.pq, &self.ts);
+        let (pq, ts, changed) = (&self.pq, &self.ts, &self.changed);
         let offsets = inp.family.offsets();
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, f: &mut [Vec3], ep: &mut [[f64; 2]]| {
@@ -619,7 +629,7 @@ impl ChenModel {
                     let i = first + o;
                     let r = inp.family.range(i);
                     let own = &mut ep[r.start - base..r.end - base];
-                    *slot = force_yield(inp, w, d, pq, yp, ts, i, own);
+                    *slot = force_yield(inp, w, d, pq, yp, ts, changed, i, own);
                 }
             };
             for_rows_mut(offsets, forces, ep, &body);
@@ -788,6 +798,7 @@ impl ForceModel for ChenModel {
             ep,
             ep_floor: _,
             first_pass,
+            changed,
             damage,
             ts,
             pq,
@@ -813,7 +824,8 @@ impl ForceModel for ChenModel {
             + reverse.as_ref().map_or(0, |r| 4 * r.len())
             + yield_params.as_ref().map_or(0, |y| 16 * y.len())
             + ep.as_ref().map_or(0, |e| 16 * e.len())
-            + 24 * first_pass.len()
+            + 32 * first_pass.len()
+            + changed.len()
             + damage.as_ref().map_or(0, Damage::memory_bytes)
             + 8 * scratch.len()
             + 16 * (pq.len() + ts.len())

@@ -310,7 +310,8 @@ pub(crate) fn with_row_buffer<T>(f: impl FnOnce(&mut RowBuffer) -> T) -> T {
 /// return map of `i`'s own end of each (`ep` is `i`'s slice of the pairs: the first of each is
 /// updated; the second, the other end's, is the force pass's to update) and the deviatoric
 /// moment `S_i` with the new extensions. `buf` keeps the first loop's extensions. Returns
-/// `[theta_i, S_i, least]`, `least` the least of 0 and the extensions it changed (m).
+/// `[theta_i, S_i, least, changed]`, `least` the least of 0 and the extensions it changed (m),
+/// `changed` 1 when it changed any (else 0).
 #[inline(always)]
 pub(crate) fn dilatation_yield<W: Weights, D: Alive>(
     inp: Inputs,
@@ -320,7 +321,7 @@ pub(crate) fn dilatation_yield<W: Weights, D: Alive>(
     i: usize,
     ep: &mut [[f64; 2]],
     buf: &mut RowBuffer,
-) -> [f64; 3] {
+) -> [f64; 4] {
     let fam = inp.family;
     let nb = fam.neighbours();
     let rl = fam.rest_lengths();
@@ -342,8 +343,8 @@ pub(crate) fn dilatation_yield<W: Weights, D: Alive>(
         acc += dilatation_term(w, wij, k, r, inp.volumes[j], e);
     }
     let theta = inp.c_theta[i] * acc;
-    let (moment, least) = own_return_map(inp, w, |k| d.alive(k), yp, i, theta, ep, buf);
-    [theta, moment, least]
+    let (moment, least, changed) = own_return_map(inp, w, |k| d.alive(k), yp, i, theta, ep, buf);
+    [theta, moment, least, f64::from(u8::from(changed))]
 }
 
 /// [`dilatation_yield`] fused with the damage check: `row` is `i`'s own bond states (1 intact),
@@ -362,7 +363,7 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     row: &mut [u8],
     ep: &mut [[f64; 2]],
     buf: &mut RowBuffer,
-) -> ([f64; 3], u32) {
+) -> ([f64; 4], u32) {
     let fam = inp.family;
     let nb = fam.neighbours();
     let rl = fam.rest_lengths();
@@ -393,8 +394,8 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     }
     let theta = inp.c_theta[i] * acc;
     let alive = |k: usize| row[k - first] == 1;
-    let (moment, least) = own_return_map(inp, w, alive, yp, i, theta, ep, buf);
-    ([theta, moment, least], count)
+    let (moment, least, changed) = own_return_map(inp, w, alive, yp, i, theta, ep, buf);
+    ([theta, moment, least, f64::from(u8::from(changed))], count)
 }
 
 /// Bond `k`'s term of `theta_i / c_i` as [`dilatation`] sums it, `wij` its deviatoric weight.
@@ -408,8 +409,8 @@ fn dilatation_term<W: Weights>(w: W, wij: f64, k: usize, r: f64, vj: f64, e: f64
 }
 
 /// The second loop of [`dilatation_yield`]: the return map of `i`'s own end of its bonds that
-/// `alive` keeps; returns `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j` after it and the
-/// least of 0 and the extensions it changed (m).
+/// `alive` keeps; returns `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j` after it, the least
+/// of 0 and the extensions it changed (m), and whether it changed any.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn own_return_map<W: Weights>(
@@ -421,12 +422,12 @@ fn own_return_map<W: Weights>(
     theta: f64,
     ep: &mut [[f64; 2]],
     buf: &RowBuffer,
-) -> (f64, f64) {
+) -> (f64, f64, bool) {
     let fam = inp.family;
     let range = fam.range(i);
     let first = range.start;
     let yi = inp.y[i];
-    let (mut moment, mut least) = (0.0, 0.0f64);
+    let (mut moment, mut least, mut changed) = (0.0, 0.0f64, false);
     for k in range {
         if !alive(k) {
             continue;
@@ -441,10 +442,11 @@ fn own_return_map<W: Weights>(
         let (ed, new) = yp.map(i, wij, theta, e, r, *slot);
         if store_changed(slot, new) {
             least = least.min(new);
+            changed = true;
         }
         moment += wij * r * (ed - new) * inp.volumes[j];
     }
-    (moment, least)
+    (moment, least, changed)
 }
 
 /// Force on particle `i` (N): `V_i sum_j 0.5 (A_ij + A_ji) n_ij V_j` over intact bonds, where
@@ -464,7 +466,10 @@ pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
 
 /// [`force`] of a plastic step after [`dilatation_yield`]: finishes the return map on the
 /// other end of each intact bond (`ep` is `i`'s slice of the pairs, whose second entries it
-/// updates, with the dilatations `theta` of that pass) and uses the new extensions.
+/// updates, with the dilatations `theta` of that pass) and uses the new extensions. The other
+/// end `j` is mapped only where `changed[j]`, that pass's flag that `j` changed one of its own
+/// ends: elsewhere the map gives back what is stored, as `j`'s own pass found for the same bond
+/// with the same bits (`ep[k][1] == ep[rev k][0]`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn force_yield<W: Weights, D: Alive>(
@@ -474,15 +479,18 @@ pub(crate) fn force_yield<W: Weights, D: Alive>(
     pq: &[[f64; 2]],
     yp: Yield,
     theta: &[[f64; 2]],
+    changed: &[bool],
     i: usize,
     ep: &mut [[f64; 2]],
 ) -> Vec3 {
     let first = inp.family.range(i).start;
     force_with(inp, w, d, pq, yp.coef_b, i, |k, j, wji, e, r| {
         let slot = &mut ep[k - first];
-        let new = yp.map(j, wji, theta[j][0], e, r, slot[1]).1;
-        // the other end's own pass stored the same value, and its least with it
-        store_changed(&mut slot[1], new);
+        if changed[j] {
+            let new = yp.map(j, wji, theta[j][0], e, r, slot[1]).1;
+            // the other end's own pass stored the same value, and its least with it
+            store_changed(&mut slot[1], new);
+        }
         (slot[0], slot[1])
     })
 }
