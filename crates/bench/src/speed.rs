@@ -27,38 +27,53 @@ pub use lammps::{lammps_match, lammps_side_by_side, FLOOR_NOTE};
 struct MaterialPath {
     name: &'static str,
     plastic: bool,
+    /// Plastic with a yield limit of almost nothing: every bond yields at every step (the
+    /// plastic paths' worst case; the others never yield).
+    yielding: bool,
     fracture: bool,
     anisotropic: bool,
 }
 
-const PATHS: [MaterialPath; 5] = [
+const PATHS: [MaterialPath; 6] = [
     MaterialPath {
         name: "elastic",
         plastic: false,
+        yielding: false,
         fracture: false,
         anisotropic: false,
     },
     MaterialPath {
         name: "brittle (fracture)",
         plastic: false,
+        yielding: false,
         fracture: true,
         anisotropic: false,
     },
     MaterialPath {
         name: "plastic",
         plastic: true,
+        yielding: false,
         fracture: false,
         anisotropic: false,
     },
     MaterialPath {
         name: "ductile (plastic + fracture)",
         plastic: true,
+        yielding: false,
         fracture: true,
+        anisotropic: false,
+    },
+    MaterialPath {
+        name: "plastic, every bond yielding",
+        plastic: true,
+        yielding: true,
+        fracture: false,
         anisotropic: false,
     },
     MaterialPath {
         name: "anisotropic elastic",
         plastic: false,
+        yielding: false,
         fracture: false,
         anisotropic: true,
     },
@@ -68,7 +83,7 @@ fn material(p: MaterialPath) -> ChenMaterial {
     let mut m = ChenMaterial::from_young_poisson(70e9, 0.22, 2500.0).expect("valid constants");
     if p.plastic {
         m.plasticity = Some(YieldParams {
-            psi0: 1e30,
+            psi0: if p.yielding { 1e-30 } else { 1e30 },
             gamma_ratio: 0.2,
             from_strain: false,
         });
@@ -153,7 +168,11 @@ fn moving_block(
     let bonds = b.bonds();
     let loads = Loads::new(b.rest().len());
     let mut s = b.solver(case, loads)?;
-    bar::set_velocities(&mut s, |x| [1e-3 * x[1], -1e-3 * x[0], 0.0]);
+    // the yielding path also stretches along x at 1/s, so every bond's extension moves
+    let stretch = if p.yielding { 1.0 } else { 0.0 };
+    bar::set_velocities(&mut s, |x| {
+        [1e-3 * x[1] + stretch * x[0], -1e-3 * x[0], 0.0]
+    });
     Ok((s, bonds))
 }
 

@@ -177,14 +177,14 @@ fn no_stability_case_ends_in_a_nan_or_a_panic() {
 #[test]
 fn speed_tables_hold_positive_rates() {
     let t = speed::paths(Effort::Tiny, &mut |_| {}).unwrap();
-    // five material paths with the scalar calibration, then the same five fitted
-    assert_eq!(t.rows.len(), 10);
+    // six material paths with the scalar calibration, then the same six fitted
+    assert_eq!(t.rows.len(), 12);
     for row in &t.rows {
         let rate: f64 = row[5].parse().unwrap();
         let bytes: f64 = row[8].parse().unwrap();
         assert!(rate > 0.0 && bytes > 8.0, "{row:?}");
     }
-    for (cal, fit) in t.rows[..5].iter().zip(&t.rows[5..]) {
+    for (cal, fit) in t.rows[..6].iter().zip(&t.rows[6..]) {
         assert_eq!(
             (cal[0].as_str(), cal[1].as_str()),
             (fit[0].as_str(), "calibrated")
