@@ -289,7 +289,6 @@ pub fn glass_wall(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Tabl
         let setup = started.elapsed();
         let bytes = s.model().memory_bytes();
         let per_step = time_steps(&mut s, steps, &case)?;
-        drop(s);
         t.push(vec![
             c.name().into(),
             n.to_string(),

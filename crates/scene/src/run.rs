@@ -5,7 +5,6 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::checkpoint::{self, Checkpoint, Position, RunIdentity, CHECKPOINT_FILE};
-use crate::setup::CheckpointPolicy;
 
 use crate::driver::StageTimes;
 use crate::error::SceneError;
@@ -198,12 +197,7 @@ fn drive(
             if observer.interrupted() {
                 return interrupt(&mut writer, dir, id, next, &driver);
             }
-            let due = match output.checkpoints {
-                CheckpointPolicy::EveryFrames(n) => frame > 0 && frame % n == 0,
-                CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
-                CheckpointPolicy::OnInterrupt => false,
-            };
-            if due {
+            if output.checkpoints.due(frame, last_checkpoint.elapsed()) {
                 let t = Instant::now();
                 let saved = checkpoint::write(dir, id, next, &writer.manifest().frames, &driver);
                 driver.add_output_time(t.elapsed());

@@ -171,14 +171,14 @@ impl SearchedShell {
         }
         self.k = k as u32;
         self.peak = r.f64("largest force")?;
-        let mut counts = [0u64; 5];
-        for (c, what) in counts.iter_mut().zip([
-            "sub-steps",
-            "trials undone",
-            "trials undone for force",
-            "trials undone for fracture",
-            "trials undone for a solve",
-        ]) {
+        let mut st = SearchStats::default();
+        for (c, what) in [
+            (&mut st.substeps, "sub-steps"),
+            (&mut st.rejected, "trials undone"),
+            (&mut st.rejected_force, "trials undone for force"),
+            (&mut st.rejected_fracture, "trials undone for fracture"),
+            (&mut st.rejected_solve, "trials undone for a solve"),
+        ] {
             *c = r.u64(what)?;
         }
         let (mut faces, mut ratios, mut budged) = (Vec::<u64>::new(), Vec::new(), Vec::<u8>::new());
@@ -191,24 +191,17 @@ impl SearchedShell {
                 message: format!("{} events, {} ratios", faces.len(), ratios.len()),
             });
         }
-        let [substeps, rejected, rejected_force, rejected_fracture, rejected_solve] = counts;
-        self.stats = SearchStats {
-            substeps,
-            rejected,
-            rejected_force,
-            rejected_fracture,
-            rejected_solve,
-            events: faces
-                .iter()
-                .zip(&ratios)
-                .zip(&budged)
-                .map(|((&face, &ratio), &b)| FractureEvent {
-                    face: face as usize,
-                    ratio,
-                    budged: b != 0,
-                })
-                .collect(),
-        };
+        st.events = faces
+            .iter()
+            .zip(&ratios)
+            .zip(&budged)
+            .map(|((&face, &ratio), &b)| FractureEvent {
+                face: face as usize,
+                ratio,
+                budged: b != 0,
+            })
+            .collect();
+        self.stats = st;
         Ok(())
     }
 

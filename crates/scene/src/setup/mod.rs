@@ -115,6 +115,28 @@ pub enum CheckpointPolicy {
     OnInterrupt,
 }
 
+impl CheckpointPolicy {
+    /// The policy `[output] checkpoint_every` names: after every `n` frames, only when
+    /// interrupted for 0, and every [`DEFAULT_CHECKPOINT_SECONDS`] when the key is left out.
+    pub fn from_key(every: Option<usize>) -> CheckpointPolicy {
+        match every {
+            None => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
+            Some(0) => CheckpointPolicy::OnInterrupt,
+            Some(n) => CheckpointPolicy::EveryFrames(n),
+        }
+    }
+
+    /// Whether a checkpoint is due once frame `frame` is written (the initial frame is 0),
+    /// `since` the wall time since the last checkpoint (or the start).
+    pub fn due(self, frame: usize, since: std::time::Duration) -> bool {
+        match self {
+            CheckpointPolicy::EveryFrames(n) => frame > 0 && frame.is_multiple_of(n),
+            CheckpointPolicy::EverySeconds(s) => since.as_secs() >= s,
+            CheckpointPolicy::OnInterrupt => false,
+        }
+    }
+}
+
 /// The wall time between checkpoints when the scene does not say (s).
 pub const DEFAULT_CHECKPOINT_SECONDS: u64 = 300;
 
@@ -485,11 +507,7 @@ fn output_options(f: &SceneFile) -> OutputOptions {
     OutputOptions {
         povray: f.output.povray.unwrap_or(true),
         particles: f.output.particles.unwrap_or(true),
-        checkpoints: match f.output.checkpoint_every {
-            None => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
-            Some(0) => CheckpointPolicy::OnInterrupt,
-            Some(n) => CheckpointPolicy::EveryFrames(n),
-        },
+        checkpoints: CheckpointPolicy::from_key(f.output.checkpoint_every),
         usd: crate::usd::UsdLayout::from_keys(f.output.usd, f.output.usd_pieces),
         fps: f.output.fps.unwrap_or(crate::usd::DEFAULT_FPS),
         smooth_cracks: f

@@ -24,7 +24,6 @@ use crate::output::{
 };
 use crate::run::{Observer, Progress};
 use crate::setup::math::bounds;
-use crate::setup::CheckpointPolicy;
 
 use super::setup::ShellSetup;
 
@@ -330,12 +329,7 @@ fn drive(
             if observer.interrupted() {
                 return Err(interrupt(&mut writer, dir, id, &stand, &setup));
             }
-            let due = match setup.checkpoints {
-                CheckpointPolicy::EveryFrames(n) => index % n == 0,
-                CheckpointPolicy::EverySeconds(s) => last_checkpoint.elapsed().as_secs() >= s,
-                CheckpointPolicy::OnInterrupt => false,
-            };
-            if due {
+            if setup.checkpoints.due(index, last_checkpoint.elapsed()) {
                 let t = Instant::now();
                 let saved = write_checkpoint(dir, id, &stand, &writer, &setup);
                 output_time += t.elapsed();

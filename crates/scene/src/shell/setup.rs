@@ -17,7 +17,7 @@ use crate::setup::colliders::build_colliders;
 use crate::setup::loads::{initial_velocities, select};
 use crate::setup::math::{bounds, up_from_gravity};
 use crate::setup::step::fit_to_frames;
-use crate::setup::{CheckpointPolicy, DEFAULT_CHECKPOINT_SECONDS};
+use crate::setup::CheckpointPolicy;
 
 use super::schema::{ShellSceneFile, ShellSpec, TET_ONLY_KEYS};
 
@@ -335,11 +335,7 @@ impl ShellSetup {
         }
         let material = shell_material(&ctx, f)?;
         let thickness = material.thickness;
-        let checkpoints = match f.output.checkpoint_every {
-            None => CheckpointPolicy::EverySeconds(DEFAULT_CHECKPOINT_SECONDS),
-            Some(0) => CheckpointPolicy::OnInterrupt,
-            Some(n) => CheckpointPolicy::EveryFrames(n),
-        };
+        let checkpoints = CheckpointPolicy::from_key(f.output.checkpoint_every);
         let frame_thickness = match f.output.thickness {
             Some(t) => ctx.non_negative("output.thickness", t)?,
             None => thickness,

@@ -227,27 +227,19 @@ impl Newmark {
             message,
         };
         r.tag("newmark")?;
-        let mut counts = [0u64; 6];
-        for (c, what) in counts.iter_mut().zip([
-            "implicit solves",
-            "L-BFGS iterations",
-            "capped solves",
-            "stalled solves",
-            "factorisations",
-            "diagonal-only factorisations",
-        ]) {
+        let mut st = NewmarkStats::default();
+        for (c, what) in [
+            (&mut st.steps, "implicit solves"),
+            (&mut st.iterations, "L-BFGS iterations"),
+            (&mut st.capped, "capped solves"),
+            (&mut st.stalled, "stalled solves"),
+            (&mut st.factorizations, "factorisations"),
+            (&mut st.diagonal_only, "diagonal-only factorisations"),
+        ] {
             *c = r.u64(what)?;
         }
-        let [steps, iterations, capped, stalled, factorizations, diagonal_only] = counts;
-        self.stats = NewmarkStats {
-            steps,
-            iterations,
-            capped,
-            stalled,
-            factorizations,
-            factor_seconds: r.f64("factorisation time")?,
-            diagonal_only,
-        };
+        st.factor_seconds = r.f64("factorisation time")?;
+        self.stats = st;
         self.last_iterations = r.usize("the last solve's iterations")?;
         self.last_capped = r.bool("whether the last solve was capped")?;
         let has_cap = r.bool("trial cap")?;
