@@ -52,6 +52,9 @@ pub struct CaseResult {
     pub wall_s: f64,
     /// What to read into it.
     pub note: String,
+    /// For a pressed body that did not break: its pairs within a horizon at rest whose
+    /// separation points against the rest one at the end (where it folded through itself).
+    pub turned_over: Option<usize>,
 }
 
 /// Energy growth beyond which an undamped run that did not stop counts as failed.
@@ -187,6 +190,7 @@ impl Watch {
             max_speed: self.top,
             wall_s: started.elapsed().as_secs_f64(),
             note,
+            turned_over: None,
         }
     }
 }
@@ -293,14 +297,21 @@ fn run_scene_case(
             deepest_in = deepest_in.max(into_colliders(&setup.driver));
         }
     }
-    let note = match (pressed, setup.driver.broken_bonds()) {
+    // pieces tumble once apart: turned-over pairs say nothing then
+    let turned = (pressed && setup.driver.broken_bonds() == 0).then(|| {
+        let d = &setup.driver;
+        turned_over(
+            &d.mesh().rest_barycentres(),
+            d.solver().positions(),
+            setup.info.horizon,
+        )
+    });
+    let note = match (pressed, turned) {
         (false, _) => note.into(),
-        // pieces tumble once apart: turned-over pairs say nothing then
-        (true, 0) => format!(
-            "{note}; deepest into the plate or ground {:.0}% of a contact radius, {} of the \
-             pairs within a horizon at rest turned over at the end",
+        (true, Some(turned)) => format!(
+            "{note}; deepest into the plate or ground {:.0}% of a contact radius, {turned} of \
+             the pairs within a horizon at rest turned over at the end",
             100.0 * deepest_in,
-            turned_over(&setup.driver, setup.info.horizon)
         ),
         (true, _) => format!(
             "{note}; deepest into the plate or ground {:.0}% of a contact radius",
@@ -320,7 +331,9 @@ fn run_scene_case(
         }
         None => note,
     };
-    watch.finish(name, damped, || total(&mut setup.driver), note, started)
+    let mut result = watch.finish(name, damped, || total(&mut setup.driver), note, started);
+    result.turned_over = turned;
+    result
 }
 
 /// The deepest any particle's contact sphere reaches into a collider, over its radius.
@@ -335,12 +348,10 @@ fn into_colliders(d: &perifrac_scene::Driver) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Pairs of particles closer than `horizon` (m) at rest whose separation now points against
-/// their rest one (`(y_j - y_i) . (x_j - x_i) < 0`): where a body has folded through itself.
-/// All pairs: for the few thousand particles of a stability case.
-fn turned_over(d: &perifrac_scene::Driver, horizon: f64) -> usize {
-    let x = d.mesh().rest_barycentres();
-    let y = d.solver().positions();
+/// Pairs of particles closer than `horizon` (m) at their rest positions `x` whose separation at
+/// `y` points against the rest one (`(y_j - y_i) . (x_j - x_i) < 0`): where a body has folded
+/// through itself. All pairs: for bodies of a few thousand particles.
+pub fn turned_over(x: &[Vec3], y: &[Vec3], horizon: f64) -> usize {
     use perifrac_physics::math::{dot, sub};
     let mut count = 0;
     for i in 0..x.len() {
@@ -363,6 +374,7 @@ fn refused(name: &str, message: String, started: Instant) -> CaseResult {
         max_speed: 0.0,
         wall_s: started.elapsed().as_secs_f64(),
         note: "refused at setup".into(),
+        turned_over: None,
     }
 }
 
@@ -403,20 +415,31 @@ fn sphere_impact(cells: [usize; 3]) -> CaseResult {
     )
 }
 
+/// What the press squeezes.
+#[derive(Clone, Copy)]
+enum Press {
+    /// Elastic steel, contact between particles asked for.
+    Elastic,
+    /// The same with the inversion guard of [`PRESS_GUARD`].
+    Guarded,
+    /// Steel with a fracture threshold (and so, by default, contact between its fragments).
+    Brittle,
+}
+
 /// A steel block pressed at 10 m/s to 20% of its height between the ground and a press plate
 /// (a kinematic ball of radius 10 m, flat over the block to 0.1 mm), which then stops and holds
-/// for as long again; `brittle` gives the steel a fracture threshold (and so, by default,
-/// contact between its fragments), otherwise contact between particles is asked for. Plate
-/// and ground are ten times as stiff as the default contact (contact spheres then reach at
-/// most 30% of their radius into them, measured in the elastic press).
-fn crush(cells: [usize; 3], brittle: bool) -> CaseResult {
+/// for as long again. Plate and ground are ten times as stiff as the default contact (contact
+/// spheres then reach at most 30% of their radius into them, measured in the elastic press).
+fn crush(cells: [usize; 3], press: Press) -> CaseResult {
     let size = cells.map(|c| c as f64 * 0.01);
     let speed = 10.0;
     let squeeze = 0.8 * size[2] / speed;
     let radius = 10.0;
-    let (material, contact) = match brittle {
-        true => ("s_crit = 0.002\n", ""),
-        false => ("", "self_contact = true\n"),
+    let guard = format!("self_contact = true\ninversion_guard = {PRESS_GUARD:?}\n");
+    let (material, contact) = match press {
+        Press::Brittle => ("s_crit = 0.002\n", ""),
+        Press::Elastic => ("", "self_contact = true\n"),
+        Press::Guarded => ("", guard.as_str()),
     };
     let text = format!(
         "{}{STEEL}{material}\n[simulation]\nduration = {}\ndamping = 0.0\n{contact}\n\
@@ -430,15 +453,20 @@ fn crush(cells: [usize; 3], brittle: bool) -> CaseResult {
         size[2] + radius,
         -speed,
     );
-    let (name, note) = match brittle {
-        true => (
+    let (name, note) = match press {
+        Press::Brittle => (
             "press a brittle steel block to 20% of its height, then hold",
             "as the elastic press with s_crit = 0.002: it shatters; contact between fragments",
         ),
-        false => (
+        Press::Elastic => (
             "press a steel block to 20% of its height, then hold (self contact)",
             "pressed between the ground and a plate at 10 m/s to 20% of the height, then held \
              for as long again",
+        ),
+        Press::Guarded => (
+            "the same press with the inversion guard (factor 10)",
+            "as the elastic press with inversion_guard = 10: springs towards each particle's \
+             affine deformation",
         ),
     };
     run_scene_case(name, &text, note, true, None, true)
@@ -446,6 +474,10 @@ fn crush(cells: [usize; 3], brittle: bool) -> CaseResult {
 
 /// The press plate's and the ground's stiffness over the default contact's, in the crushes.
 const PRESS_STIFFNESS: f64 = 10.0;
+
+/// The guarded press's inversion guard factor: the least of 1, 3 and 10 under which the 8-cell
+/// block folds nowhere (docs/DECISIONS.md).
+const PRESS_GUARD: f64 = 10.0;
 
 fn two_materials(cells: [usize; 3], steps: u64) -> CaseResult {
     let size = cells.map(|c| c as f64 * 0.01);
@@ -608,10 +640,17 @@ pub fn run_all(effort: Effort, progress: &mut dyn FnMut(&str)) -> Vec<CaseResult
         "sphere impact".into(),
         Box::new(move || Ok(sphere_impact(cells))),
     ));
-    cases.push(("crush".into(), Box::new(move || Ok(crush(cells, false)))));
+    cases.push((
+        "crush".into(),
+        Box::new(move || Ok(crush(cells, Press::Elastic))),
+    ));
+    cases.push((
+        "guarded crush".into(),
+        Box::new(move || Ok(crush(cells, Press::Guarded))),
+    ));
     cases.push((
         "brittle crush".into(),
-        Box::new(move || Ok(crush(cells, true))),
+        Box::new(move || Ok(crush(cells, Press::Brittle))),
     ));
     cases.push((
         "two materials".into(),
@@ -647,6 +686,7 @@ pub fn run_all(effort: Effort, progress: &mut dyn FnMut(&str)) -> Vec<CaseResult
                     max_speed: 0.0,
                     wall_s: started.elapsed().as_secs_f64(),
                     note: String::new(),
+                    turned_over: None,
                 },
             }
         })

@@ -184,7 +184,8 @@ pub struct SimulationSpec {
     pub correction: Option<String>,
     /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.
     pub influence: Option<String>,
-    /// Xu: the inversion guard's factor on the rest bond stiffness (default none).
+    /// The inversion guard's factor on the rest bond stiffness (default none): springs towards
+    /// each particle's affine deformation that keep a crushed body from folding through itself.
     pub inversion_guard: Option<f64>,
     /// Explicit: cover each step by sub-steps of `dt 2^-k`, refined where forces jump or bonds
     /// break late (default false).

@@ -478,3 +478,26 @@ fn the_fitted_correction_is_bounded_on_a_coarse_real_mesh() {
     // b is calibrated the same way in both
     assert_eq!(fitted.deviatoric, scalar.deviatoric);
 }
+
+#[test]
+fn the_inversion_guard_is_a_setting_of_both_models() {
+    let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
+    // Chen's model takes the guard: its lagged springs shorten the stable step (at rest the
+    // estimate sees a spring of `f` times each bond's stiffness in every direction, not only
+    // along the bond)
+    let plain = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    let guarded = Setup::with_limits(&scene(&with("inversion_guard = 3.0")), None, &limits());
+    let ratio = plain.info.dt_limit / guarded.unwrap().info.dt_limit;
+    // measured 2.34 on this 2-cell cube at f = 3 (a guard the estimate missed would give 1)
+    assert!(ratio > 1.5 && ratio < 3.0, "{ratio}");
+    for bad in ["inversion_guard = 0.0", "inversion_guard = -1.0"] {
+        let e = refusal(&with(bad)).to_string();
+        assert!(e.contains("simulation.inversion_guard"), "{e}");
+    }
+    // the influence function is still Xu's alone
+    let e = refusal(&with("influence = \"linear\"")).to_string();
+    assert!(
+        e.contains("simulation.influence") && e.contains("model = \"xu\""),
+        "{e}"
+    );
+}

@@ -3,10 +3,10 @@
 pub mod basis;
 pub mod chen;
 mod fit;
+mod guard;
 pub(crate) mod kernel;
 pub mod params;
 pub mod xu;
-mod xu_guard;
 pub(crate) mod xu_kernel;
 pub mod xu_params;
 

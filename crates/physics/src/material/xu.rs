@@ -1,11 +1,11 @@
 //! Xu's hyperelastic peridynamic model (MODEL.md section 5): normalised weights, dilatation from
 //! stretch ratios, `W_i = lambda g(theta_i) + mu sum_j w_ij V_j G_ij h(tau_ij)`, forces as the
 //! exact negative gradient of `E = sum_i V_i W_i`, bond breaking as in Chen's model, and an
-//! optional inversion guard ([`super::xu_guard`]).
+//! optional inversion guard ([`super::guard`]).
 
 use super::basis::Curve;
+use super::guard::{Guard, RestStiffness};
 use super::kernel::{AllAlive, Mask, NoPlastic};
-use super::xu_guard::Guard;
 use super::xu_kernel::{
     bond_energy_sum, dilatation_sum, force, force_and_energy, LinearH, NeoHookeanH, PerParticleH,
     Stored, StvkH, Unit, XuInputs,
@@ -311,8 +311,11 @@ impl XuModel {
         }
     }
 
-    fn guard_inputs<'a>(&'a self, y: &'a [Vec3]) -> super::xu_guard::GuardInputs<'a> {
-        super::xu_guard::GuardInputs {
+    fn guard_inputs<'a>(
+        &'a self,
+        y: &'a [Vec3],
+    ) -> super::guard::GuardInputs<'a, BondStiffness<'a>> {
+        super::guard::GuardInputs {
             family: self.setup.disc.family(),
             rest: self.setup.disc.rest_positions(),
             y,
@@ -362,10 +365,10 @@ pub(crate) struct BondStiffness<'a> {
     model: &'a XuModel,
 }
 
-impl BondStiffness<'_> {
+impl RestStiffness for BondStiffness<'_> {
     /// `(k_ij, k_ji)` of directed bond `k` of particle `i` (N/m).
     #[inline]
-    pub(crate) fn pair(&self, i: usize, k: usize) -> (f64, f64) {
+    fn pair(&self, i: usize, k: usize) -> (f64, f64) {
         (
             self.model.rest_bond_stiffness(i, k),
             self.model.reverse_bond_stiffness(i, k),
@@ -498,7 +501,8 @@ impl ForceModel for XuModel {
                 dt = dt.min((2.0 * self.setup.mass[i] / sum).sqrt());
             }
         }
-        dt
+        // the guard's lagged springs add `f` times each bond's rest stiffness
+        dt / (1.0 + self.setup.options.inversion_guard.unwrap_or(0.0)).sqrt()
     }
 
     fn memory_bytes(&self) -> usize {

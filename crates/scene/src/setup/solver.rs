@@ -123,16 +123,11 @@ pub(super) fn model(
     let physics = |cause: PhysicsError| ctx.physics(cause);
     match materials {
         Materials::Chen(m) => {
-            for (k, given) in [
-                ("influence", sim.influence.is_some()),
-                ("inversion_guard", sim.inversion_guard.is_some()),
-            ] {
-                if given {
-                    return Err(ctx.err(
-                        format!("simulation.{k}"),
-                        "is a setting of Xu's model: give the materials model = \"xu\"",
-                    ));
-                }
+            if sim.influence.is_some() {
+                return Err(ctx.err(
+                    "simulation.influence",
+                    "is a setting of Xu's model: give the materials model = \"xu\"",
+                ));
             }
             let base = ChenOptions::default();
             let options = match sim.correction.as_deref() {
@@ -153,9 +148,15 @@ pub(super) fn model(
                     ))
                 }
             };
-            Ok(AnyModel::Chen(
-                ChenModel::with_options(disc, m, options).map_err(physics)?,
-            ))
+            let model = ChenModel::with_options(disc, m, options).map_err(physics)?;
+            let model = match sim.inversion_guard {
+                None => model,
+                Some(f) => {
+                    let f = ctx.positive("simulation.inversion_guard", f, "")?;
+                    model.with_inversion_guard(f).map_err(physics)?
+                }
+            };
+            Ok(AnyModel::Chen(model))
         }
         Materials::Xu(m) => {
             if sim.correction.is_some() {

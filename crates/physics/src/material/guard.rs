@@ -1,28 +1,34 @@
-//! Xu's inversion guard (MODEL.md section 5): a spring on each bond towards the particle's
-//! least-squares affine deformation, `E_inv = f/2 sum_i sum_j k_ij |eta_ij - F_i xi_ij|^2`, with
-//! `F_i` flipped (two rows swapped) where `det F_i < 0` so an inverted neighbourhood is pulled
-//! back out. `F_i` is lagged: fitted at [`crate::ForceModel::update_forces`] (once per step) and
-//! held fixed by trial forces and energies, so within a step the guard is a quadratic energy
-//! whose gradient the forces are exactly.
+//! The inversion guard (MODEL.md section 5, Xu's; Chen's model takes it too): a spring on each
+//! bond towards the particle's least-squares affine deformation,
+//! `E_inv = f/2 sum_i sum_j k_ij |eta_ij - F_i xi_ij|^2`, with `F_i` flipped (two rows swapped)
+//! where `det F_i < 0` so an inverted neighbourhood is pulled back out. `F_i` is lagged: fitted
+//! at [`crate::ForceModel::update_forces`] (once per step) and held fixed by trial forces and
+//! energies, so within a step the guard is a quadratic energy whose gradient the forces are
+//! exactly. `k_ij` is the model's own rest stiffness of the bond ([`RestStiffness`]).
 
-use super::xu::BondStiffness;
 use crate::family::Family;
 use crate::math::{norm_squared, sub, Mat3, Vec3, IDENTITY};
 use crate::par::map_particles;
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use rayon::prelude::*;
 
+/// A model's rest stiffness of its bonds as the guard weighs them.
+pub(crate) trait RestStiffness: Sync {
+    /// `(k_ij, k_ji)` (N/m) of directed bond `k` of particle `i` and of its reverse.
+    fn pair(&self, i: usize, k: usize) -> (f64, f64);
+}
+
 /// What the guard reads.
-pub(crate) struct GuardInputs<'a> {
+pub(crate) struct GuardInputs<'a, S> {
     pub family: &'a Family,
     pub rest: &'a [Vec3],
     pub y: &'a [Vec3],
-    pub stiffness: BondStiffness<'a>,
+    pub stiffness: S,
     /// Intact flags per directed bond, when bonds can break.
     pub alive: Option<&'a [u8]>,
 }
 
-impl GuardInputs<'_> {
+impl<S> GuardInputs<'_, S> {
     #[inline(always)]
     fn alive(&self, k: usize) -> bool {
         self.alive.is_none_or(|a| a[k] != 0)
@@ -42,6 +48,11 @@ impl Guard {
             f: vec![Some(IDENTITY); n],
             factor,
         }
+    }
+
+    /// The guard's factor on the rest bond stiffness.
+    pub(crate) fn factor(&self) -> f64 {
+        self.factor
     }
 
     /// Writes the lagged gradients: a flag per particle (0 where none), then the gradients.
@@ -75,12 +86,12 @@ impl Guard {
 
     /// Fits `F_i = (sum k eta xi^T)(sum k xi xi^T)^-1` over intact bonds at `inp.y`, flipped
     /// where its determinant is negative.
-    pub(crate) fn update(&mut self, inp: &GuardInputs) {
+    pub(crate) fn update<S: RestStiffness>(&mut self, inp: &GuardInputs<S>) {
         map_particles(&mut self.f, |i| fit(inp, i));
     }
 
     /// Adds `f sum_j [k_ij (eta - F_i xi) + k_ji (eta - F_j xi)]` to each particle's force (N).
-    pub(crate) fn add_forces(&self, inp: &GuardInputs, forces: &mut [Vec3]) {
+    pub(crate) fn add_forces<S: RestStiffness>(&self, inp: &GuardInputs<S>, forces: &mut [Vec3]) {
         let (f, factor) = (&self.f, self.factor);
         let fam = inp.family;
         forces
@@ -113,7 +124,7 @@ impl Guard {
     }
 
     /// `E_inv` (J) at `inp.y` with the lagged gradients.
-    pub(crate) fn energy(&self, inp: &GuardInputs) -> f64 {
+    pub(crate) fn energy<S: RestStiffness>(&self, inp: &GuardInputs<S>) -> f64 {
         let fam = inp.family;
         let total: f64 = (0..fam.len())
             .filter_map(|i| self.f[i].map(|fm| (i, fm)))
@@ -140,7 +151,7 @@ fn residual(f: &Mat3, eta: Vec3, xi: Vec3) -> Vec3 {
     sub(eta, fx)
 }
 
-fn fit(inp: &GuardInputs, i: usize) -> Option<Mat3> {
+fn fit<S: RestStiffness>(inp: &GuardInputs<S>, i: usize) -> Option<Mat3> {
     let fam = inp.family;
     let (mut a, mut b) = ([[0.0; 3]; 3], [[0.0; 3]; 3]);
     for k in fam.range(i) {
