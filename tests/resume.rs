@@ -192,7 +192,8 @@ fn an_implicit_tear_resumes_byte_identically() {
 #[test]
 fn an_event_search_run_resumes_byte_identically() {
     // the second time with Chen's inversion guard, whose springs enter every sub-step's forces
-    // (its lagged gradients are written with the model's state; each step fits them afresh)
+    // (its lagged gradients are written with the model's state, but each step fits them afresh
+    // before reading them, so this checks the guarded stepping, not that part of the file)
     for guard in ["", "\ninversion_guard = 1.0"] {
         let tmp = tempfile::tempdir().unwrap();
         let search = format!("dt = \"auto\"\nevent_search = true{guard}");

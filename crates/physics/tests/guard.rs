@@ -95,7 +95,7 @@ fn the_guard_resists_a_mirror_image_that_chen_cannot_see() {
     let inner = interior(&x, [0.03; 3], 0.012);
     assert!(!inner.is_empty());
     assert!(inner.iter().all(|&i| norm(f[i]) > 0.0));
-    // no net force or torque: the guard's springs are pairs
+    // no net force: each bond's two springs act on its two ends alike
     let net = f
         .iter()
         .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);

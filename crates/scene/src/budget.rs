@@ -23,11 +23,16 @@ pub const BYTES_PER_PARTICLE: u64 = 600;
 pub const BYTES_PER_VERTEX: u64 = 100;
 
 /// Bytes per directed bond at the peak: the family build's per-particle rows (4 B, up to twice
-/// that while they grow) next to the final neighbour list (4 B) and rest lengths (8 B), and the
-/// model's bond state (damage, plastic extension: up to 14 B). BENCHMARKS.md measures 12.8 B
-/// per bond for an elastic model and 26.2 for a ductile one once built, so this over-estimates
-/// by 1.5x to 3x.
-pub const BYTES_PER_BOND: u64 = 40;
+/// that while they grow) next to the final neighbour list (4 B) and rest lengths (8 B), the
+/// fitted dilatation's pair of weights (16 B, and a 4 B reverse index while they are made) and
+/// the model's bond state (damage, plastic extensions: up to 17 B). BENCHMARKS.md measures
+/// 28.8 B per bond for the default elastic model and 46.4 for a ductile one once built, so
+/// this over-estimates by 1.2x to 2x.
+pub const BYTES_PER_BOND: u64 = 56;
+
+/// Extra bytes per directed bond of an inversion guard: Chen's model keeps each bond's rest
+/// stiffness and its reverse's (Xu's computes them as it goes: an over-estimate there).
+pub const GUARD_BYTES_PER_BOND: u64 = 16;
 
 /// Extra bytes per directed bond of an implicit step: the sparse step matrix (a 3 x 3 block of
 /// f64 per bond pair, 36 B per directed bond) and its Cholesky factor, its fill-in taken as
@@ -191,32 +196,38 @@ pub struct WorkEstimate {
 
 impl WorkEstimate {
     /// Sizes and memory of a run on a mesh of `shape` with horizon factor `horizon_factor`;
-    /// `implicit` adds the step matrix and its factor.
-    pub fn of_mesh(shape: MeshShape, horizon_factor: f64, implicit: bool) -> WorkEstimate {
+    /// `extra` bytes a bond more ([`extra_per_bond`]).
+    pub fn of_mesh(shape: MeshShape, horizon_factor: f64, extra: u64) -> WorkEstimate {
         let family = family_size(horizon_factor, shape.mean_edge, shape.mean_volume);
         let bonds = saturating_u64(shape.tets as f64 * family);
         WorkEstimate {
             particles: shape.tets,
             vertices: shape.vertices,
             bonds,
-            memory_bytes: memory(shape.tets, shape.vertices, bonds, implicit),
+            memory_bytes: memory(shape.tets, shape.vertices, bonds, extra),
             ..WorkEstimate::default()
         }
     }
 
     /// The same run with the counted bonds: the memory is estimated again from them.
-    pub fn with_bonds(self, bonds: u64, implicit: bool) -> WorkEstimate {
+    pub fn with_bonds(self, bonds: u64, extra: u64) -> WorkEstimate {
         WorkEstimate {
             bonds,
-            memory_bytes: memory(self.particles, self.vertices, bonds, implicit),
+            memory_bytes: memory(self.particles, self.vertices, bonds, extra),
             ..self
         }
     }
 }
 
-/// Peak memory (bytes) of a run with these counts, saturating.
-pub fn memory(particles: u64, vertices: u64, bonds: u64, implicit: bool) -> u64 {
-    let per_bond = BYTES_PER_BOND + if implicit { IMPLICIT_BYTES_PER_BOND } else { 0 };
+/// Bytes a bond beyond [`BYTES_PER_BOND`]: the implicit step's matrix and factor, the
+/// inversion guard's stiffnesses.
+pub fn extra_per_bond(implicit: bool, guard: bool) -> u64 {
+    u64::from(implicit) * IMPLICIT_BYTES_PER_BOND + u64::from(guard) * GUARD_BYTES_PER_BOND
+}
+
+/// Peak memory (bytes) of a run with these counts and `extra` bytes a bond more, saturating.
+pub fn memory(particles: u64, vertices: u64, bonds: u64, extra: u64) -> u64 {
+    let per_bond = BYTES_PER_BOND.saturating_add(extra);
     particles
         .saturating_mul(BYTES_PER_PARTICLE)
         .saturating_add(vertices.saturating_mul(BYTES_PER_VERTEX))
@@ -475,7 +486,7 @@ mod tests {
 
     #[test]
     fn memory_saturates_and_is_refused_past_the_limit() {
-        assert_eq!(memory(u64::MAX, 1, 1, false), u64::MAX);
+        assert_eq!(memory(u64::MAX, 1, 1, 0), u64::MAX);
         let limits = Limits {
             memory_bytes: 1 << 30,
             memory_source: "test".into(),
@@ -487,7 +498,7 @@ mod tests {
         };
         // cells = [271, 271, 271] of issue 17: 119 million tets.
         let counts = perifrac_topology::primitives::box_counts([271; 3]).unwrap();
-        let e = WorkEstimate::of_mesh(MeshShape::of_box([0.01; 3], counts), 1.45, false);
+        let e = WorkEstimate::of_mesh(MeshShape::of_box([0.01; 3], counts), 1.45, 0);
         let msg = limits.check_memory(&e).unwrap_err();
         assert!(
             msg.contains(&format!("{} particles", 6 * 271 * 271 * 271)),

@@ -284,14 +284,11 @@ impl Setup {
         let horizon_factor = sim.horizon_factor.unwrap_or(defaults::HORIZON_FACTOR);
 
         // Memory, from the mesh spec, before the mesh is built.
+        let extra = budget::extra_per_bond(implicit, sim.inversion_guard.is_some());
         let planned = mesh::plan(&ctx, scene)?;
         let planned_shape = planned.shape;
         limits
-            .check_memory(&WorkEstimate::of_mesh(
-                planned_shape,
-                horizon_factor,
-                implicit,
-            ))
+            .check_memory(&WorkEstimate::of_mesh(planned_shape, horizon_factor, extra))
             .map_err(too_large)?;
         let stage = Instant::now();
         let mut mesh = mesh::build(scene, planned)?;
@@ -306,7 +303,7 @@ impl Setup {
             mean_edge: edge,
             mean_volume: volumes.iter().sum::<f64>() / volumes.len().max(1) as f64,
         };
-        let estimate = WorkEstimate::of_mesh(built, horizon_factor, implicit);
+        let estimate = WorkEstimate::of_mesh(built, horizon_factor, extra);
         limits.check_memory(&estimate).map_err(too_large)?;
 
         let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
@@ -324,7 +321,7 @@ impl Setup {
             solver::AnyModel::Chen(m) => Some(m.correction()),
             solver::AnyModel::Xu(_) => None,
         };
-        let mut estimate = estimate.with_bonds(report.bonds as u64, implicit);
+        let mut estimate = estimate.with_bonds(report.bonds as u64, extra);
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;

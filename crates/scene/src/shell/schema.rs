@@ -209,7 +209,7 @@ pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
     ),
     (
         "simulation.inversion_guard",
-        "a key of Xu's peridynamic model",
+        "a key of the tet scenes' peridynamic models",
     ),
     (
         "simulation.overshoot",
