@@ -438,7 +438,7 @@ impl ChenModel {
 
     /// Adds the inversion guard of factor `factor` (> 0, finite): a spring of `factor` times
     /// each bond's rest stiffness towards its particle's least-squares affine deformation,
-    /// flipped where that is inverted (MODEL.md section 5; [`super::guard`]). Chen's bonds are
+    /// flipped where that is inverted (MODEL.md section 5; `material/guard.rs`). Chen's bonds are
     /// linear springs that store no more energy as a neighbourhood folds through itself; the
     /// guard resists the non-affine part of a deformation, where a fold starts, and carries
     /// nothing under a uniform one. It costs two walks over the bonds a step (with a 3 x 3

@@ -1,7 +1,7 @@
 //! Xu's hyperelastic peridynamic model (MODEL.md section 5): normalised weights, dilatation from
 //! stretch ratios, `W_i = lambda g(theta_i) + mu sum_j w_ij V_j G_ij h(tau_ij)`, forces as the
 //! exact negative gradient of `E = sum_i V_i W_i`, bond breaking as in Chen's model, and an
-//! optional inversion guard ([`super::guard`]).
+//! optional inversion guard (`material/guard.rs`).
 
 use super::basis::Curve;
 use super::guard::{Guard, RestStiffness};
