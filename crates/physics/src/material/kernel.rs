@@ -14,6 +14,19 @@ pub(crate) trait Weights: Sync + Copy {
     /// without it the loops keep their single-weight arithmetic, bit for bit).
     const SPLIT: bool = false;
     fn pair(&self, k: usize, r: f64) -> (f64, f64);
+    /// `(omega_ij r, omega_ji r)` of bond `k` (m): the weights times the rest length, which an
+    /// isotropic weight gives without a division.
+    #[inline(always)]
+    fn pair_times_r(&self, k: usize, r: f64) -> (f64, f64) {
+        let (wij, wji) = self.pair(k, r);
+        (wij * r, wji * r)
+    }
+    /// `Some(delta)` (m) when the weight is `delta / r` both ways: the force loop then takes
+    /// one reciprocal of `r l` per bond in place of two divisions.
+    #[inline(always)]
+    fn isotropic(&self) -> Option<f64> {
+        None
+    }
     /// The dilatation weights `d_ij`, `d_ji` of bond `k` (the deviatoric ones unless `SPLIT`).
     #[inline(always)]
     fn dil_pair(&self, k: usize, r: f64) -> (f64, f64) {
@@ -32,6 +45,16 @@ impl Weights for Isotropic {
     fn pair(&self, _k: usize, r: f64) -> (f64, f64) {
         let w = self.delta / r;
         (w, w)
+    }
+
+    #[inline(always)]
+    fn pair_times_r(&self, _k: usize, _r: f64) -> (f64, f64) {
+        (self.delta, self.delta)
+    }
+
+    #[inline(always)]
+    fn isotropic(&self) -> Option<f64> {
+        Some(self.delta)
     }
 }
 
@@ -64,6 +87,16 @@ impl<W: Weights> Weights for Fitted<'_, W> {
     #[inline(always)]
     fn pair(&self, k: usize, r: f64) -> (f64, f64) {
         self.base.pair(k, r)
+    }
+
+    #[inline(always)]
+    fn pair_times_r(&self, k: usize, r: f64) -> (f64, f64) {
+        self.base.pair_times_r(k, r)
+    }
+
+    #[inline(always)]
+    fn isotropic(&self) -> Option<f64> {
+        self.base.isotropic()
     }
 
     #[inline(always)]
@@ -191,15 +224,15 @@ pub(crate) fn dilatation<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
         let j = nb[k] as usize;
         let r = rl[k];
         let e = norm(sub(inp.y[j], yi)) - r;
-        let wv = w.pair(k, r).0 * inp.volumes[j];
         if W::SPLIT {
             acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
         } else {
-            acc += wv * e;
+            acc += w.pair(k, r).0 * inp.volumes[j] * e;
         }
         if MOMENT {
-            u += wv * r * (e - p.pair(k).0);
-            m += wv * r * r;
+            let wrv = w.pair_times_r(k, r).0 * inp.volumes[j];
+            u += wrv * (e - p.pair(k).0);
+            m += wrv * r;
         }
     }
     let theta = inp.c_theta[i] * acc;
@@ -239,15 +272,15 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
             count += 1;
             continue;
         }
-        let wv = w.pair(k, r).0 * inp.volumes[j];
         if W::SPLIT {
             acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
         } else {
-            acc += wv * e;
+            acc += w.pair(k, r).0 * inp.volumes[j] * e;
         }
         if MOMENT {
-            u += wv * r * e;
-            m += wv * r * r;
+            let wrv = w.pair_times_r(k, r).0 * inp.volumes[j];
+            u += wrv * e;
+            m += wrv * r;
         }
     }
     let theta = inp.c_theta[i] * acc;
@@ -262,15 +295,33 @@ pub(crate) struct Yield<'a> {
 }
 
 impl Yield<'_> {
-    /// The return map (MODEL.md, Plasticity) of particle `i`'s end of a bond: weight `w`,
-    /// rest length `r` (m), extension `e` (m), plastic extension `ep` (m), `i`'s dilatation
-    /// `theta`. Returns `(ed, ep_new)`. Both ends of a bond run this with the same bits wherever
-    /// it is called, so a bond's two stored pairs stay mirror images.
+    /// The return map (MODEL.md, Plasticity) of particle `i`'s end of a bond: `wr` its weight
+    /// times its rest length `r` (m), `w` its weight (asked for only when the bond yields),
+    /// extension `e` (m), plastic extension `ep` (m), `i`'s dilatation `theta`. Returns
+    /// `(ed, ep_new)`. Both ends of a bond run this with the same bits wherever it is called, so
+    /// a bond's two stored pairs stay mirror images.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn map(&self, i: usize, w: f64, theta: f64, e: f64, r: f64, ep: f64) -> (f64, f64) {
+    fn map(
+        &self,
+        i: usize,
+        wr: f64,
+        w: impl FnOnce() -> f64,
+        theta: f64,
+        e: f64,
+        r: f64,
+        ep: f64,
+    ) -> (f64, f64) {
         let (psi0, gamma_ratio) = self.params[i];
-        let four_wb = 4.0 * w * self.coef_b[i];
+        let b = self.coef_b[i];
         let ed = e - theta * r / 3.0;
+        // inside the yield surface, `(A_dev r)^2 / 2 <= psi0 r^2` with `A_dev r = 4 omega r b
+        // (ed - ep)`, decides without the weight's division (most bonds, most steps)
+        let trial_r = 4.0 * wr * b * (ed - ep);
+        if 0.5 * trial_r * trial_r <= psi0 * (r * r) {
+            return (ed, ep);
+        }
+        let four_wb = 4.0 * w() * b;
         let trial = four_wb * (ed - ep);
         let new = crate::plastic::return_map_bond(trial, ep, four_wb, psi0, gamma_ratio * r);
         (ed, new)
@@ -292,7 +343,7 @@ fn store_changed(slot: &mut f64, new: f64) -> bool {
 /// the rest again (the same bits).
 pub(crate) const ROW_BUFFER: usize = 512;
 
-/// A row's `(e_ij, omega_ij)` kept between the loops of a walk.
+/// A row's `(e_ij, omega_ij r_ij)` kept between the loops of a walk.
 pub(crate) type RowBuffer = [[f64; 2]; ROW_BUFFER];
 
 thread_local! {
@@ -336,11 +387,10 @@ pub(crate) fn dilatation_yield<W: Weights, D: Alive>(
         let j = nb[k] as usize;
         let r = rl[k];
         let e = norm(sub(inp.y[j], yi)) - r;
-        let wij = w.pair(k, r).0;
         if let Some(b) = buf.get_mut(k - first) {
-            *b = [e, wij];
+            *b = [e, w.pair_times_r(k, r).0];
         }
-        acc += dilatation_term(w, wij, k, r, inp.volumes[j], e);
+        acc += dilatation_term(w, k, r, inp.volumes[j], e);
     }
     let theta = inp.c_theta[i] * acc;
     let (moment, least, changed) = own_return_map(inp, w, |k| d.alive(k), yp, i, theta, ep, buf);
@@ -386,11 +436,10 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
             count += 1;
             continue;
         }
-        let wij = w.pair(k, r).0;
         if let Some(b) = buf.get_mut(k - first) {
-            *b = [e, wij];
+            *b = [e, w.pair_times_r(k, r).0];
         }
-        acc += dilatation_term(w, wij, k, r, inp.volumes[j], e);
+        acc += dilatation_term(w, k, r, inp.volumes[j], e);
     }
     let theta = inp.c_theta[i] * acc;
     let alive = |k: usize| row[k - first] == 1;
@@ -398,13 +447,13 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     ([theta, moment, least, f64::from(u8::from(changed))], count)
 }
 
-/// Bond `k`'s term of `theta_i / c_i` as [`dilatation`] sums it, `wij` its deviatoric weight.
+/// Bond `k`'s term of `theta_i / c_i` as [`dilatation`] sums it.
 #[inline(always)]
-fn dilatation_term<W: Weights>(w: W, wij: f64, k: usize, r: f64, vj: f64, e: f64) -> f64 {
+fn dilatation_term<W: Weights>(w: W, k: usize, r: f64, vj: f64, e: f64) -> f64 {
     if W::SPLIT {
         w.dil_pair(k, r).0 * vj * e
     } else {
-        wij * vj * e
+        w.pair(k, r).0 * vj * e
     }
 }
 
@@ -434,17 +483,17 @@ fn own_return_map<W: Weights>(
         }
         let j = fam.neighbours()[k] as usize;
         let r = fam.rest_lengths()[k];
-        let [e, wij] = match buf.get(k - first) {
+        let [e, wr] = match buf.get(k - first) {
             Some(&b) => b,
-            None => [norm(sub(inp.y[j], yi)) - r, w.pair(k, r).0],
+            None => [norm(sub(inp.y[j], yi)) - r, w.pair_times_r(k, r).0],
         };
         let slot = &mut ep[k - first][0];
-        let (ed, new) = yp.map(i, wij, theta, e, r, *slot);
+        let (ed, new) = yp.map(i, wr, || w.pair(k, r).0, theta, e, r, *slot);
         if store_changed(slot, new) {
             least = least.min(new);
             changed = true;
         }
-        moment += wij * r * (ed - new) * inp.volumes[j];
+        moment += wr * (ed - new) * inp.volumes[j];
     }
     (moment, least, changed)
 }
@@ -461,7 +510,7 @@ pub(crate) fn force<W: Weights, P: Plastic, D: Alive>(
     coef_b: &[f64],
     i: usize,
 ) -> Vec3 {
-    force_with(inp, w, d, pq, coef_b, i, |k, _, _, _, _| p.pair(k))
+    force_with(inp, w, d, pq, coef_b, i, |k, _, _, _| p.pair(k))
 }
 
 /// [`force`] of a plastic step after [`dilatation_yield`]: finishes the return map on the
@@ -484,10 +533,13 @@ pub(crate) fn force_yield<W: Weights, D: Alive>(
     ep: &mut [[f64; 2]],
 ) -> Vec3 {
     let first = inp.family.range(i).start;
-    force_with(inp, w, d, pq, yp.coef_b, i, |k, j, wji, e, r| {
+    force_with(inp, w, d, pq, yp.coef_b, i, |k, j, e, r| {
         let slot = &mut ep[k - first];
         if changed[j] {
-            let new = yp.map(j, wji, theta[j][0], e, r, slot[1]).1;
+            let wr = w.pair_times_r(k, r).1;
+            let new = yp
+                .map(j, wr, || w.pair(k, r).1, theta[j][0], e, r, slot[1])
+                .1;
             // the other end's own pass stored the same value, and its least with it
             store_changed(&mut slot[1], new);
         }
@@ -495,7 +547,7 @@ pub(crate) fn force_yield<W: Weights, D: Alive>(
     })
 }
 
-/// The force loop, with `ep_of(k, j, omega_ji, e, r)` giving bond `k`'s `(ep_ij, ep_ji)`.
+/// The force loop, with `ep_of(k, j, e, r)` giving bond `k`'s `(ep_ij, ep_ji)`.
 #[inline(always)]
 fn force_with<W: Weights, D: Alive>(
     inp: Inputs,
@@ -504,7 +556,7 @@ fn force_with<W: Weights, D: Alive>(
     pq: &[[f64; 2]],
     coef_b: &[f64],
     i: usize,
-    mut ep_of: impl FnMut(usize, usize, f64, f64, f64) -> (f64, f64),
+    mut ep_of: impl FnMut(usize, usize, f64, f64) -> (f64, f64),
 ) -> Vec3 {
     let fam = inp.family;
     let nb = fam.neighbours();
@@ -523,9 +575,29 @@ fn force_with<W: Weights, D: Alive>(
         let eta = sub(inp.y[j], yi);
         let l = norm(eta);
         let e = l - r;
-        let (wij, wji) = w.pair(k, r);
-        let (epij, epji) = ep_of(k, j, wji, e, r);
         let [pj, qj] = pq[j];
+        if let Some(delta) = w.isotropic() {
+            // omega = delta / r both ways, so r (A_ij + A_ji) / 4 needs no division and one
+            // reciprocal of r l serves both (the weight's and the direction's): two divisions a
+            // bond become one. Every sum and product pairs the two ends' terms commutatively,
+            // so the pair scalar is bitwise the same from both ends, as below.
+            let inv = 1.0 / (r * l);
+            let (epij, epji) = ep_of(k, j, e, r);
+            let bsum = bi * (e - epij) + coef_b[j] * (e - epji);
+            let t = if W::SPLIT {
+                let (dij, dji) = w.dil_pair(k, r);
+                r * (dij * pi + dji * pj) + delta * (bsum - (qi + qj) * r)
+            } else {
+                delta * ((pi + pj) + bsum - (qi + qj) * r)
+            };
+            let s = 2.0 * t * (vi * inp.volumes[j]) * inv;
+            acc[0] += s * eta[0];
+            acc[1] += s * eta[1];
+            acc[2] += s * eta[2];
+            continue;
+        }
+        let (wij, wji) = w.pair(k, r);
+        let (epij, epji) = ep_of(k, j, e, r);
         let (aij, aji) = if W::SPLIT {
             let (dij, dji) = w.dil_pair(k, r);
             (
