@@ -224,11 +224,7 @@ pub(crate) fn dilatation<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
         let j = nb[k] as usize;
         let r = rl[k];
         let e = norm(sub(inp.y[j], yi)) - r;
-        if W::SPLIT {
-            acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
-        } else {
-            acc += w.pair(k, r).0 * inp.volumes[j] * e;
-        }
+        acc += dilatation_term(w, k, r, inp.volumes[j], e);
         if MOMENT {
             let wrv = w.pair_times_r(k, r).0 * inp.volumes[j];
             u += wrv * (e - p.pair(k).0);
@@ -272,11 +268,7 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
             count += 1;
             continue;
         }
-        if W::SPLIT {
-            acc += w.dil_pair(k, r).0 * inp.volumes[j] * e;
-        } else {
-            acc += w.pair(k, r).0 * inp.volumes[j] * e;
-        }
+        acc += dilatation_term(w, k, r, inp.volumes[j], e);
         if MOMENT {
             let wrv = w.pair_times_r(k, r).0 * inp.volumes[j];
             u += wrv * e;
@@ -576,11 +568,11 @@ fn force_with<W: Weights, D: Alive>(
         let l = norm(eta);
         let e = l - r;
         let [pj, qj] = pq[j];
-        if let Some(delta) = w.isotropic() {
+        let s = if let Some(delta) = w.isotropic() {
             // omega = delta / r both ways, so r (A_ij + A_ji) / 4 needs no division and one
             // reciprocal of r l serves both (the weight's and the direction's): two divisions a
             // bond become one. Every sum and product pairs the two ends' terms commutatively,
-            // so the pair scalar is bitwise the same from both ends, as below.
+            // so the pair scalar is bitwise the same from both ends, as in the general branch.
             let inv = 1.0 / (r * l);
             let (epij, epji) = ep_of(k, j, e, r);
             let bsum = bi * (e - epij) + coef_b[j] * (e - epji);
@@ -590,29 +582,27 @@ fn force_with<W: Weights, D: Alive>(
             } else {
                 delta * ((pi + pj) + bsum - (qi + qj) * r)
             };
-            let s = 2.0 * t * (vi * inp.volumes[j]) * inv;
-            acc[0] += s * eta[0];
-            acc[1] += s * eta[1];
-            acc[2] += s * eta[2];
-            continue;
-        }
-        let (wij, wji) = w.pair(k, r);
-        let (epij, epji) = ep_of(k, j, e, r);
-        let (aij, aji) = if W::SPLIT {
-            let (dij, dji) = w.dil_pair(k, r);
-            (
-                dij * pi + wij * (bi * (e - epij) - qi * r),
-                dji * pj + wji * (coef_b[j] * (e - epji) - qj * r),
-            )
+            2.0 * t * (vi * inp.volumes[j]) * inv
         } else {
-            (
-                wij * (pi + bi * (e - epij) - qi * r),
-                wji * (pj + coef_b[j] * (e - epji) - qj * r),
-            )
+            let (wij, wji) = w.pair(k, r);
+            let (epij, epji) = ep_of(k, j, e, r);
+            let (aij, aji) = if W::SPLIT {
+                let (dij, dji) = w.dil_pair(k, r);
+                (
+                    dij * pi + wij * (bi * (e - epij) - qi * r),
+                    dji * pj + wji * (coef_b[j] * (e - epji) - qj * r),
+                )
+            } else {
+                (
+                    wij * (pi + bi * (e - epij) - qi * r),
+                    wji * (pj + coef_b[j] * (e - epji) - qj * r),
+                )
+            };
+            // 0.5 (A_ij + A_ji) with A = 4 omega (...): the pair scalar is bitwise the same
+            // from both ends (commutative sums and products), so Newton's third law holds
+            // bond by bond.
+            2.0 * (aij + aji) * (vi * inp.volumes[j]) / l
         };
-        // 0.5 (A_ij + A_ji) with A = 4 omega (...): the pair scalar is bitwise the same from both
-        // ends (commutative sums and products), so Newton's third law holds bond by bond.
-        let s = 2.0 * (aij + aji) * (vi * inp.volumes[j]) / l;
         acc[0] += s * eta[0];
         acc[1] += s * eta[1];
         acc[2] += s * eta[2];
