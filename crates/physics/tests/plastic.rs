@@ -265,6 +265,26 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
     }
 }
 
+/// A 6 x 3 x 3-cell bar of steel yielding at a simple-shear strain of about 1e-3 (extensions
+/// capped at 0.05 of a bond), breaking at a stretch of 4e-3 when `breaking`.
+fn ductile_bar(breaking: bool) -> (perifrac_physics::Discretization, ChenMaterial) {
+    let (disc, _, _) = block([SIZE, SIZE / 2.0, SIZE / 2.0], [6, 3, 3], 1.5);
+    let delta = disc.horizon();
+    let mut mat: ChenMaterial = steel();
+    let b = 15.0 * mat.shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
+    let a_y = 2.0 * delta * b * 1e-3;
+    mat.plasticity = Some(YieldParams {
+        psi0: 0.5 * a_y * a_y,
+        gamma_ratio: 0.05,
+        from_strain: true,
+    });
+    mat.fracture = breaking.then_some(perifrac_physics::FractureParams {
+        s_crit: 4e-3,
+        alpha: 0.0,
+    });
+    (disc, mat)
+}
+
 /// A plastic step keeps each bond's pair of extensions a mirror of its reverse's, bit for bit:
 /// the return map runs on both ends of every bond from each end (the first of a pair in the
 /// dilatation pass, the second in the force pass) and the two must agree, or the force on a
@@ -275,7 +295,7 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
 /// map of bonds to them.
 #[test]
 fn a_bonds_plastic_extensions_mirror_its_reverses_bit_for_bit() {
-    use perifrac_physics::{ForceModel, FractureParams};
+    use perifrac_physics::ForceModel;
     let tilted = Some([[2.0, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 1.0]]);
     for (anisotropy, localized, breaking) in [
         (None, false, true),
@@ -283,20 +303,7 @@ fn a_bonds_plastic_extensions_mirror_its_reverses_bit_for_bit() {
         (None, true, true),
         (tilted, true, false),
     ] {
-        let (disc, _, _) = block([SIZE, SIZE / 2.0, SIZE / 2.0], [6, 3, 3], 1.5);
-        let delta = disc.horizon();
-        let mut mat: ChenMaterial = steel();
-        let b = 15.0 * mat.shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
-        let a_y = 2.0 * delta * b * 1e-3;
-        mat.plasticity = Some(YieldParams {
-            psi0: 0.5 * a_y * a_y,
-            gamma_ratio: 0.05,
-            from_strain: true,
-        });
-        mat.fracture = breaking.then_some(FractureParams {
-            s_crit: 4e-3,
-            alpha: 0.0,
-        });
+        let (disc, mut mat) = ductile_bar(breaking);
         mat.anisotropy = anisotropy;
         let mut m = ChenModel::new(disc.clone(), &[mat]).unwrap();
         let x = disc.rest_positions().to_vec();
@@ -368,5 +375,63 @@ fn a_bonds_plastic_extensions_mirror_its_reverses_bit_for_bit() {
             broken.len()
         );
         assert!(!localized || still_rows > 0);
+    }
+}
+
+/// The passes skip the plastic extensions of rows that hold only `+0.0` (their own ends never
+/// yielded, nor those of their neighbours), a record the model keeps step by step. A copy told
+/// its extensions anew (`set_plastic_extensions`, which rebuilds the record from the values)
+/// must then give the same forces, extensions and broken bonds, bit for bit, at every step of
+/// a shear that yields one part of a ductile block and leaves another unstrained.
+#[test]
+fn rows_skipped_as_never_yielded_hold_only_zeros() {
+    for breaking in [false, true] {
+        let (disc, mat) = ductile_bar(breaking);
+        let mut m = ChenModel::new(disc.clone(), &[mat]).unwrap();
+        let x = disc.rest_positions().to_vec();
+        let n = x.len();
+        let bits = |f: &[[f64; 3]]| f.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let (mut fa, mut fb) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+        let (mut ba, mut bb) = (Vec::new(), Vec::new());
+        for step in 1..=6 {
+            let g = 2e-3 * step as f64;
+            // no strain for x < SIZE / 2, a shear ramping up beyond it
+            let y: Vec<_> = x
+                .iter()
+                .map(|p| {
+                    let ramp = 2.0 * ((p[0] - SIZE / 2.0) / (SIZE / 4.0)).clamp(0.0, 1.0);
+                    [p[0] + g * p[1] * ramp, p[1], p[2]]
+                })
+                .collect();
+            let mut told = m.clone();
+            told.set_plastic_extensions(&m.plastic_extensions().unwrap())
+                .unwrap();
+            if breaking {
+                m.break_bonds_and_update_forces(&y, &mut ba, &mut fa);
+                told.break_bonds_and_update_forces(&y, &mut bb, &mut fb);
+            } else {
+                m.update_forces(&y, &mut fa);
+                told.update_forces(&y, &mut fb);
+            }
+            assert_eq!(bits(&fa), bits(&fb), "step {step}");
+            assert_eq!(ba, bb, "step {step}");
+            let ep = |m: &ChenModel| {
+                let e = m.plastic_extensions().unwrap();
+                e.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+            };
+            assert_eq!(ep(&m), ep(&told), "step {step}");
+        }
+        // both kinds of row are there: some never yielded, some did (else it shows little)
+        let ep = m.plastic_extensions().unwrap();
+        let fam = disc.family();
+        let zero_rows = (0..n)
+            .filter(|&i| ep[fam.range(i)].iter().all(|&e| e == 0.0))
+            .count();
+        eprintln!(
+            "breaking {breaking}: {zero_rows} of {n} rows never yielded, {} broken",
+            ba.len()
+        );
+        assert!(zero_rows > 0 && zero_rows < n, "{zero_rows} of {n}");
+        assert_eq!(ba.is_empty(), !breaking);
     }
 }

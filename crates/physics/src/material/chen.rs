@@ -8,8 +8,8 @@ use super::fit::{
 use super::guard::{Guard, GuardInputs, RestStiffness};
 use super::kernel::{
     dilatation, dilatation_breaking, dilatation_yield, dilatation_yield_breaking, energy_density,
-    force, force_yield, with_row_buffer, AllAlive, Fitted, Inputs, Isotropic, Mask, NoPlastic,
-    PerBond, Plastic, WithPlastic, Yield,
+    force, force_yield, with_row_buffer, yield_inside, AllAlive, Fitted, Inputs, Isotropic, Mask,
+    NoPlastic, PerBond, Plastic, RowHint, WithPlastic, Yield,
 };
 use super::same_features;
 use super::{ChenMaterial, ForceModel};
@@ -97,6 +97,10 @@ struct Setup {
     reverse: Option<Vec<u32>>,
     /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
     yield_params: Option<Vec<(f64, f64)>>,
+    /// Per particle `[r_min + r_max (m), 1 / (r_min r_max) (1/m^2), C (1 - margin)]` with
+    /// `C = sqrt(2 Psi0) / (4 b)`, the constants of the test that lets a plastic first pass
+    /// skip its return-map loop (`kernel::Yield::all_inside`), when some material is plastic.
+    yield_inside: Option<Vec<[f64; 3]>>,
     options: ChenOptions,
 }
 
@@ -117,6 +121,12 @@ pub struct ChenModel {
     /// Per particle, whether the last first pass changed any of its own ends' extensions (the
     /// force pass maps the other end of a bond only then), only when plastic.
     changed: Vec<bool>,
+    /// Per particle, which of its row's plastic extensions may be nonzero, only when plastic:
+    /// [`OWN_SET`] its own ends (and every neighbour has been given [`ROW_SET`]), [`ROW_SET`]
+    /// any of its pairs. A row without them holds `+0.0` only, so the passes skip its loads
+    /// (most of a plastic body never yields). Set once and kept; recomputed from the values
+    /// when they are set from outside.
+    ep_rows: Vec<u8>,
     damage: Option<Damage>,
     /// Per particle `(theta_i, S_i)` from the last dilatation pass.
     ts: Vec<[f64; 2]>,
@@ -173,6 +183,53 @@ fn family_moments(disc: &Discretization, w: Option<&[f64]>, i: usize) -> (f64, f
         let wv = wk * disc.volumes()[fam.neighbours()[k] as usize];
         (m1 + wv * r, m2 + wv * r * r)
     })
+}
+
+/// [`ChenModel::ep_rows`]' bit: the particle's own ends may be nonzero, and its neighbours
+/// have [`ROW_SET`].
+const OWN_SET: u8 = 1;
+/// [`ChenModel::ep_rows`]' bit: some pair of the particle's row may be nonzero.
+const ROW_SET: u8 = 2;
+
+/// What the first pass knows of particle `i` from [`ChenModel::ep_rows`] and the last pass's
+/// `changed` (a hint for speed: the results do not depend on it).
+fn row_hint(rows: &[u8], changed: &[bool], i: usize) -> RowHint {
+    RowHint {
+        clean: rows[i] & OWN_SET == 0,
+        pairs_clean: rows[i] & ROW_SET == 0,
+        yielded: changed[i],
+    }
+}
+
+/// Gives particle `i` [`OWN_SET`] (once) and its neighbours [`ROW_SET`]: its own ends are
+/// about to hold values other than `+0.0`, and so are the mirrored ends of its neighbours' rows.
+fn mark_own(fam: &crate::family::Family, rows: &mut [u8], i: usize) {
+    if rows[i] & OWN_SET != 0 {
+        return;
+    }
+    rows[i] |= OWN_SET | ROW_SET;
+    for &j in &fam.neighbours()[fam.range(i)] {
+        rows[j as usize] |= ROW_SET;
+    }
+}
+
+/// [`ChenModel::ep_rows`] from the values of the pairs `ep`: [`OWN_SET`] where an own end's bits
+/// are not those of `+0.0` (with [`ROW_SET`] for the neighbours), [`ROW_SET`] where any pair's are not.
+fn mark_rows(fam: &crate::family::Family, ep: &[[f64; 2]], rows: &mut [u8]) {
+    let zero = |x: f64| x.to_bits() == 0;
+    for i in 0..fam.len() {
+        let row = &ep[fam.range(i)];
+        rows[i] = if row.iter().all(|p| zero(p[0]) && zero(p[1])) {
+            0
+        } else {
+            ROW_SET
+        };
+    }
+    for i in 0..fam.len() {
+        if !ep[fam.range(i)].iter().all(|p| zero(p[0])) {
+            mark_own(fam, rows, i);
+        }
+    }
 }
 
 /// `ep[k] = (own[k], own[rev k])` for every directed bond `k`.
@@ -281,6 +338,7 @@ impl Setup {
         Some(Yield {
             coef_b: &self.coef_b,
             params,
+            inside: self.yield_inside.as_deref()?,
         })
     }
 }
@@ -395,6 +453,9 @@ impl ChenModel {
                 })
                 .collect()
         });
+        let yield_inside = yield_params
+            .as_deref()
+            .map(|p| yield_inside(fam, &coef_b, p));
         let damage = fractures.then(|| {
             let s_crit = (0..n)
                 .map(|i| mat(i).fracture.map_or(f64::INFINITY, |f| f.s_crit))
@@ -405,10 +466,10 @@ impl ChenModel {
             Damage::new(fam, s_crit, alpha)
         });
         let ep = plastic.then(|| vec![[0.0; 2]; fam.num_bonds()]);
-        let (first_pass, changed) = if plastic {
-            (vec![[0.0; 4]; n], vec![true; n])
+        let (first_pass, changed, ep_rows) = if plastic {
+            (vec![[0.0; 4]; n], vec![true; n], vec![0; n])
         } else {
-            (Vec::new(), Vec::new())
+            (Vec::new(), Vec::new(), Vec::new())
         };
         Ok(ChenModel {
             setup: Setup {
@@ -421,6 +482,7 @@ impl ChenModel {
                 dil_weights,
                 reverse,
                 yield_params,
+                yield_inside,
                 options,
                 disc,
             },
@@ -428,6 +490,7 @@ impl ChenModel {
             ep_floor: 0.0,
             first_pass,
             changed,
+            ep_rows,
             damage,
             ts: vec![[0.0; 2]; n],
             pq: vec![[0.0; 2]; n],
@@ -537,6 +600,7 @@ impl ChenModel {
         }
         fill_pairs(fam, own, ep);
         self.ep_floor = WithPlastic { ep }.floor();
+        mark_rows(fam, ep, &mut self.ep_rows);
         Ok(())
     }
 
@@ -622,6 +686,7 @@ impl ChenModel {
         };
         let inp = s.inputs(y);
         let offsets = inp.family.offsets();
+        let (rows, last) = (&self.ep_rows, &self.changed);
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, out: &mut [[f64; 4]], ep: &mut [[f64; 2]]| {
                 let base = offsets[first] as usize;
@@ -630,7 +695,8 @@ impl ChenModel {
                         let i = first + o;
                         let r = inp.family.range(i);
                         let own = &mut ep[r.start - base..r.end - base];
-                        *t = dilatation_yield(inp, w, d, yp, i, own, buf);
+                        let hint = row_hint(rows, last, i);
+                        *t = dilatation_yield(inp, w, d, yp, i, hint, own, buf);
                     }
                 })
             };
@@ -641,14 +707,19 @@ impl ChenModel {
 
     /// `ts` and the floor from the first pass of a plastic step, then `pq`.
     fn finish_first_pass(&mut self) {
-        for ((t, c), &[theta, moment, least, changed]) in self
+        let fam = self.setup.disc.family();
+        for (i, ((t, c), &[theta, moment, least, changed])) in self
             .ts
             .iter_mut()
             .zip(&mut self.changed)
             .zip(&self.first_pass)
+            .enumerate()
         {
             *t = [theta, moment];
             *c = changed != 0.0;
+            if *c {
+                mark_own(fam, &mut self.ep_rows, i);
+            }
             self.ep_floor = self.ep_floor.min(least);
         }
         self.pressure_pass();
@@ -714,11 +785,13 @@ impl ChenModel {
         let inp = s.inputs(y);
         let delta = s.disc.horizon();
         let floor = self.ep_floor;
+        let (rows, last) = (&self.ep_rows, &self.changed);
         let out = (&mut self.first_pass[..], &mut ep[..]);
         with_wd!(@w s, w, {
             damage.visit_check(inp.family, delta, out, &|i, row, own, brk| {
+                let hint = row_hint(rows, last, i);
                 with_row_buffer(|buf| {
-                    dilatation_yield_breaking(inp, w, brk, floor, yp, i, row, own, buf)
+                    dilatation_yield_breaking(inp, w, brk, floor, yp, i, hint, row, own, buf)
                 })
             })
         });
@@ -744,7 +817,7 @@ impl ChenModel {
             return;
         };
         let inp = s.inputs(y);
-        let (pq, ts, changed) = (&self.pq, &self.ts, &self.changed);
+        let (pq, ts, changed, rows) = (&self.pq, &self.ts, &self.changed, &self.ep_rows);
         let offsets = inp.family.offsets();
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, f: &mut [Vec3], ep: &mut [[f64; 2]]| {
@@ -753,7 +826,13 @@ impl ChenModel {
                     let i = first + o;
                     let r = inp.family.range(i);
                     let own = &mut ep[r.start - base..r.end - base];
-                    *slot = force_yield(inp, w, d, pq, yp, ts, changed, i, own);
+                    // a row of +0.0 whose neighbours changed nothing (else it would have
+                    // ROW_SET): the elastic loop, which reads no pair
+                    *slot = if rows[i] & ROW_SET == 0 {
+                        force(inp, w, NoPlastic, d, pq, yp.coef_b, i)
+                    } else {
+                        force_yield(inp, w, d, pq, yp, ts, changed, i, own)
+                    };
                 }
             };
             for_rows_mut(offsets, forces, ep, &body);
@@ -798,6 +877,7 @@ impl ForceModel for ChenModel {
             r.array_into("plastic extensions", &mut own)?;
             fill_pairs(self.setup.disc.family(), &own, ep);
             self.ep_floor = WithPlastic { ep }.floor();
+            mark_rows(self.setup.disc.family(), ep, &mut self.ep_rows);
         }
         same_features("damage", self.damage.is_some(), r.bool("fracture")?)?;
         if let Some(d) = &mut self.damage {
@@ -928,6 +1008,7 @@ impl ForceModel for ChenModel {
             ep_floor: _,
             first_pass,
             changed,
+            ep_rows,
             damage,
             ts,
             pq,
@@ -945,6 +1026,7 @@ impl ForceModel for ChenModel {
             dil_weights,
             reverse,
             yield_params,
+            yield_inside,
             options: _,
         } = setup;
         disc.memory_bytes()
@@ -953,9 +1035,11 @@ impl ForceModel for ChenModel {
             + dil_weights.as_ref().map_or(0, |w| 16 * w.len())
             + reverse.as_ref().map_or(0, |r| 4 * r.len())
             + yield_params.as_ref().map_or(0, |y| 16 * y.len())
+            + yield_inside.as_ref().map_or(0, |y| 24 * y.len())
             + ep.as_ref().map_or(0, |e| 16 * e.len())
             + 32 * first_pass.len()
             + changed.len()
+            + ep_rows.len()
             + damage.as_ref().map_or(0, Damage::memory_bytes)
             + 8 * scratch.len()
             + 16 * (pq.len() + ts.len())
