@@ -43,9 +43,10 @@ pub const IMPLICIT_BYTES_PER_BOND: u64 = 150;
 /// mesh with its face hash map while it is built, and the copy handed to the writer.
 pub const MESH_BYTES_PER_TET: u64 = 200;
 
-/// Seconds per bond update on one core: the brittle (fracture) path of BENCHMARKS.md, 55.2
-/// million bond updates per second (18 ns; elastic 8.8 ns, ductile 32 ns), with half again for
-/// a slower or busier machine.
+/// Seconds per bond update on one core, an estimate with room to spare: BENCHMARKS.md's
+/// bond-rate block measures 8.9 ns elastic, 9.8 brittle and 10.9 ductile (the default model,
+/// one thread), 25 ns where every bond yields; the rest covers contact, output and a slower or
+/// busier machine (it was set when the brittle path took 18 ns and the ductile one 32).
 pub const SECONDS_PER_BOND_UPDATE: f64 = 27e-9;
 
 /// Speed-up per worker thread: BENCHMARKS.md measures 1.9 to 2.0 times one thread on two.
