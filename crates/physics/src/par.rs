@@ -21,6 +21,20 @@ where
         });
 }
 
+/// Calls `f(i, &mut out[i])` for every particle, in parallel.
+pub(crate) fn update_particles<T: Send, F>(out: &mut [T], f: F)
+where
+    F: Fn(usize, &mut T) + Sync,
+{
+    out.par_chunks_mut(GRAIN)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            for (o, slot) in chunk.iter_mut().enumerate() {
+                f(c * GRAIN + o, slot);
+            }
+        });
+}
+
 /// Calls `f(i)` for every particle and stores the pair it returns in `a[i]`, `b[i]`, in
 /// parallel.
 pub(crate) fn map_particles2<A: Send, B: Send, F>(a: &mut [A], b: &mut [B], f: F)

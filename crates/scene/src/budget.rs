@@ -44,9 +44,11 @@ pub const IMPLICIT_BYTES_PER_BOND: u64 = 150;
 pub const MESH_BYTES_PER_TET: u64 = 200;
 
 /// Seconds per bond update on one core, an estimate with room to spare: BENCHMARKS.md's
-/// bond-rate block measures 8.9 ns elastic, 9.8 brittle and 10.9 ductile (the default model,
-/// one thread), 25 ns where every bond yields; the rest covers contact, output and a slower or
-/// busier machine (it was set when the brittle path took 18 ns and the ductile one 32).
+/// bond-rate block measures 5.4 ns elastic, 5.9 brittle and 6.0 ductile (the default model,
+/// one thread, the vector loops; 9 to 11 ns on a CPU without AVX2 or with anisotropic
+/// weights, which take the scalar ones: 17.7 ns anisotropic), 26 ns where every bond yields;
+/// the rest covers contact, output and a slower or busier machine (it was set when the
+/// brittle path took 18 ns and the ductile one 32).
 pub const SECONDS_PER_BOND_UPDATE: f64 = 27e-9;
 
 /// Speed-up per worker thread: BENCHMARKS.md measures 1.9 to 2.0 times one thread on two.

@@ -8,15 +8,16 @@ use super::fit::{
 use super::guard::{Guard, GuardInputs, RestStiffness};
 use super::kernel::{
     dilatation, dilatation_breaking, dilatation_yield, dilatation_yield_breaking, energy_density,
-    force, force_yield, with_row_buffer, yield_inside, AllAlive, Fitted, Inputs, Isotropic, Mask,
-    NoPlastic, PerBond, Plastic, RowHint, WithPlastic, Yield,
+    force, force_yield, with_row_buffer, yield_inside, Alive, AllAlive, Fitted, Inputs, Isotropic,
+    Mask, NoPlastic, PerBond, Plastic, RowHint, WithPlastic, Yield,
 };
+use super::lanes::{self, theta_moment};
 use super::same_features;
 use super::{ChenMaterial, ForceModel};
 use crate::error::PhysicsError;
 use crate::fracture::Damage;
 use crate::math::{mat_vec, norm, sub, Vec3, IDENTITY};
-use crate::par::{for_rows_mut, map_particles};
+use crate::par::{for_rows_mut, map_particles, update_particles};
 use crate::particles::Discretization;
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
 use std::f64::consts::PI;
@@ -48,8 +49,9 @@ pub struct ChenOptions {
     /// included (the scalar `c_i` gets only the trace right: on unevenly cut families it reads
     /// shear as volume change). The deviatoric weights stay `omega_ij`, with `b_i` as
     /// `calibrated` says. Costs 16 bytes a bond (each bond's weight and its reverse's, stored
-    /// in bond order), a force evaluation 1.06 times the scalar calibration's on 1.8 M bonds,
-    /// and a stable step 8% to 13% shorter (docs/DECISIONS.md).
+    /// in bond order), a force evaluation 1.15 times the scalar calibration's on 13.9 M bonds
+    /// (one thread, the vector loops of `lanes.rs`; 1.06 on 1.8 M bonds before them), and a
+    /// stable step 8% to 13% shorter (docs/DECISIONS.md).
     pub fitted_dilatation: bool,
 }
 
@@ -134,6 +136,9 @@ pub struct ChenModel {
     scratch: Vec<f64>,
     /// The inversion guard, when asked for ([`ChenModel::with_inversion_guard`]).
     guard: Option<ChenGuard>,
+    /// Per particle, what the lane loops read of a neighbour; empty where they cannot apply
+    /// (per-bond weights, or a CPU without AVX2).
+    packed: Vec<lanes::Packed>,
 }
 
 /// The inversion guard ([`super::guard`]) on Chen's bonds, with each bond's rest stiffness.
@@ -332,6 +337,18 @@ impl Setup {
         }
     }
 
+    /// The lane loops' inputs over `packed` ([`lanes`]) where they can run: a non-empty
+    /// `packed` (allocated only with the isotropic weight) and a CPU with AVX2. The elastic
+    /// passes take them only where nothing is plastic; a plastic one only on rows that hold no
+    /// plastic extension.
+    fn lane_row<'a>(&'a self, packed: &'a [lanes::Packed]) -> Option<lanes::Row<'a>> {
+        if packed.is_empty() {
+            return None;
+        }
+        let dw = self.dil_weights.as_deref();
+        lanes::Row::new(self.disc.family(), packed, self.disc.horizon(), dw)
+    }
+
     /// The return map's per-particle constants, when some material is plastic.
     fn yield_view(&self) -> Option<Yield<'_>> {
         let params = self.yield_params.as_deref()?;
@@ -471,6 +488,8 @@ impl ChenModel {
         } else {
             (Vec::new(), Vec::new(), Vec::new())
         };
+        let lanes_run = weights.is_none() && lanes::available();
+        let packed = vec![lanes::Packed::default(); if lanes_run { n } else { 0 }];
         Ok(ChenModel {
             setup: Setup {
                 c_theta,
@@ -496,6 +515,7 @@ impl ChenModel {
             pq: vec![[0.0; 2]; n],
             scratch: vec![0.0; n],
             guard: None,
+            packed,
         })
     }
 
@@ -664,8 +684,20 @@ impl ChenModel {
 
     /// Recomputes `theta` at `y` with the plastic extensions as they are, then `pq`.
     fn dilatation_pass(&mut self, y: &[Vec3]) {
+        self.pack_positions(y);
         let s = &self.setup;
         let inp = s.inputs(y);
+        if let Some(row) = s.lane_row(&self.packed).filter(|_| self.ep.is_none()) {
+            let moment = s.options.energy_consistent;
+            let (fam, c) = (s.disc.family(), &s.c_theta);
+            let alive = self.damage.as_ref().map(Damage::bond_state);
+            map_particles(&mut self.ts, |i| {
+                let (sums, _) = row.dilatation(i, alive.map(|a| &a[fam.range(i)]));
+                theta_moment(c[i], sums, moment).into()
+            });
+            self.pressure_pass();
+            return;
+        }
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             let ts = &mut self.ts;
             if s.options.energy_consistent {
@@ -680,6 +712,7 @@ impl ChenModel {
     /// The first pass of a plastic step: `theta` at `y`, the return map of each bond's own end
     /// and `S` (into `ts`), then `pq`. The other ends' return map is [`Self::force_yield_pass`]'s.
     fn yield_pass(&mut self, y: &[Vec3]) {
+        self.pack_positions(y);
         let s = &self.setup;
         let (Some(ep), Some(yp)) = (self.ep.as_deref_mut(), s.yield_view()) else {
             return;
@@ -687,6 +720,7 @@ impl ChenModel {
         let inp = s.inputs(y);
         let offsets = inp.family.offsets();
         let (rows, last) = (&self.ep_rows, &self.changed);
+        let lanes = s.lane_row(&self.packed);
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, out: &mut [[f64; 4]], ep: &mut [[f64; 2]]| {
                 let base = offsets[first] as usize;
@@ -696,7 +730,7 @@ impl ChenModel {
                         let r = inp.family.range(i);
                         let own = &mut ep[r.start - base..r.end - base];
                         let hint = row_hint(rows, last, i);
-                        *t = dilatation_yield(inp, w, d, yp, i, hint, own, buf);
+                        *t = dilatation_yield(inp, w, d, yp, i, hint, own, buf, lanes);
                     }
                 })
             };
@@ -739,12 +773,32 @@ impl ChenModel {
             let [theta, m] = ts[i];
             [a[i] * theta - k * c[i] * b[i] * m, b[i] * theta / 3.0]
         });
+        if s.lane_row(&self.packed).is_some() {
+            let pq = &self.pq;
+            update_particles(&mut self.packed, |i, p| {
+                let [pi, qi] = pq[i];
+                p.pq = [pi, qi, b[i], 0.0];
+            });
+        }
+    }
+
+    /// Stores `y` (m) and the volumes in the packed records where the lane loops can run.
+    fn pack_positions(&mut self, y: &[Vec3]) {
+        if self.setup.lane_row(&self.packed).is_none() {
+            return;
+        }
+        let vol = self.setup.disc.volumes();
+        update_particles(&mut self.packed, |i, p| {
+            let [x, y, z] = y[i];
+            p.at = [x, y, z, vol[i]];
+        });
     }
 
     /// The damage check and the dilatation pass of an elastic breaking model in one walk over
     /// the bonds (each bond's extension computed once for both), then `pq`. The same results,
     /// bit for bit, as [`ForceModel::break_bonds`] followed by the dilatation pass.
     fn break_and_dilate(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        self.pack_positions(y);
         let s = &self.setup;
         let Some(damage) = self.damage.as_mut() else {
             return;
@@ -752,17 +806,18 @@ impl ChenModel {
         let inp = s.inputs(y);
         let delta = s.disc.horizon();
         let ts = &mut self.ts;
+        let lanes = s.lane_row(&self.packed);
         // zero-sized: no storage
         let none = &mut vec![(); inp.family.num_bonds()][..];
         with_wd!(@w s, w, {
             if s.options.energy_consistent {
                 damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
-                    let ((theta, m), c) = dilatation_breaking::<_, true>(inp, w, brk, i, row);
+                    let ((theta, m), c) = dilatation_breaking::<_, true>(inp, w, lanes, brk, i, row);
                     ([theta, m], c)
                 })
             } else {
                 damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
-                    let ((theta, m), c) = dilatation_breaking::<_, false>(inp, w, brk, i, row);
+                    let ((theta, m), c) = dilatation_breaking::<_, false>(inp, w, lanes, brk, i, row);
                     ([theta, m], c)
                 })
             }
@@ -776,6 +831,7 @@ impl ChenModel {
     /// [`ForceModel::break_bonds`] before the step would, and the return map skips the bonds it
     /// broke. The same results, bit for bit.
     fn break_and_yield(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        self.pack_positions(y);
         let s = &self.setup;
         let (Some(damage), Some(ep), Some(yp)) =
             (self.damage.as_mut(), self.ep.as_deref_mut(), s.yield_view())
@@ -787,11 +843,12 @@ impl ChenModel {
         let floor = self.ep_floor;
         let (rows, last) = (&self.ep_rows, &self.changed);
         let out = (&mut self.first_pass[..], &mut ep[..]);
+        let lanes = s.lane_row(&self.packed);
         with_wd!(@w s, w, {
             damage.visit_check(inp.family, delta, out, &|i, row, own, brk| {
                 let hint = row_hint(rows, last, i);
                 with_row_buffer(|buf| {
-                    dilatation_yield_breaking(inp, w, brk, floor, yp, i, hint, row, own, buf)
+                    dilatation_yield_breaking(inp, w, brk, floor, yp, i, hint, row, own, buf, lanes)
                 })
             })
         });
@@ -804,6 +861,12 @@ impl ChenModel {
         let s = &self.setup;
         let inp = s.inputs(y);
         let (pq, b) = (&self.pq, &s.coef_b);
+        if let Some(row) = s.lane_row(&self.packed).filter(|_| self.ep.is_none()) {
+            let fam = s.disc.family();
+            let alive = self.damage.as_ref().map(Damage::bond_state);
+            map_particles(forces, |i| row.force(i, alive.map(|a| &a[fam.range(i)])));
+            return;
+        }
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             map_particles(forces, |i| force(inp, w, p, d, pq, b, i))
         })
@@ -819,6 +882,7 @@ impl ChenModel {
         let inp = s.inputs(y);
         let (pq, ts, changed, rows) = (&self.pq, &self.ts, &self.changed, &self.ep_rows);
         let offsets = inp.family.offsets();
+        let lanes = s.lane_row(&self.packed);
         with_wd!(s, self.damage.as_ref(), |w, d| {
             let body = |first: usize, f: &mut [Vec3], ep: &mut [[f64; 2]]| {
                 let base = offsets[first] as usize;
@@ -829,7 +893,10 @@ impl ChenModel {
                     // a row of +0.0 whose neighbours changed nothing (else it would have
                     // ROW_SET): the elastic loop, which reads no pair
                     *slot = if rows[i] & ROW_SET == 0 {
-                        force(inp, w, NoPlastic, d, pq, yp.coef_b, i)
+                        match lanes {
+                            Some(l) => l.force(i, d.row(inp.family, i)),
+                            None => force(inp, w, NoPlastic, d, pq, yp.coef_b, i),
+                        }
                     } else {
                         force_yield(inp, w, d, pq, yp, ts, changed, i, own)
                     };
@@ -1014,6 +1081,7 @@ impl ForceModel for ChenModel {
             pq,
             scratch,
             guard,
+            packed,
         } = self;
         let Setup {
             disc,
@@ -1042,9 +1110,14 @@ impl ForceModel for ChenModel {
             + ep_rows.len()
             + damage.as_ref().map_or(0, Damage::memory_bytes)
             + 8 * scratch.len()
+            + std::mem::size_of_val(&packed[..])
             + 16 * (pq.len() + ts.len())
             + guard
                 .as_ref()
                 .map_or(0, |g| g.guard.memory_bytes() + 16 * g.k.len())
     }
 }
+
+#[cfg(test)]
+#[path = "lanes_tests.rs"]
+mod lanes_tests;

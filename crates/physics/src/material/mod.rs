@@ -5,6 +5,7 @@ pub mod chen;
 mod fit;
 mod guard;
 pub(crate) mod kernel;
+mod lanes;
 pub mod params;
 pub mod xu;
 pub(crate) mod xu_kernel;

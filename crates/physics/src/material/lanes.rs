@@ -1,0 +1,516 @@
+//! Chen's dilatation and force loops four bonds at a time in AVX2 vectors (x86-64 only, chosen
+//! at run time): each bond's arithmetic is the scalar loop's, operation for operation
+//! (exactly rounded adds, products, square roots and quotients, no fused multiply-add), and a
+//! particle's sums take the bonds in the same order, so the results are the scalar loops'
+//! (`kernel.rs`) to the bit. For rows that hold no plastic extension, with the isotropic
+//! weight (the default), with or without the fitted dilatation weights and a row of bond
+//! states (docs/DECISIONS.md, "Four bonds a vector").
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+use crate::family::Family;
+use crate::math::Vec3;
+
+/// What the loops read of a neighbour, packed in one cache line so four neighbours load as
+/// eight vectors: `[y_x, y_y, y_z, V]` (m, m^3) before the dilatation pass, then
+/// `[p, q, b, 0]` of the force pass ([`super::kernel::force`]'s `pq` and `coef_b`).
+#[repr(C, align(64))]
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Packed {
+    /// Position (m) and volume (m^3).
+    pub at: [f64; 4],
+    /// `p = a theta - (b c / 3) S` (N/m^6), `q = b theta / 3` (N/m^7), `b` (N/m^7), 0.
+    pub pq: [f64; 4],
+}
+
+/// The inputs of both loops: the family, the packed neighbours, the isotropic weight's horizon
+/// `delta` (m) and the fitted dilatation weights `(d_ij, d_ji)` when they are used. Made only
+/// where the CPU runs the lane loops ([`Row::new`]), which is what makes calling them sound.
+#[derive(Clone, Copy)]
+pub(crate) struct Row<'a> {
+    family: &'a Family,
+    packed: &'a [Packed],
+    delta: f64,
+    dw: Option<&'a [[f64; 2]]>,
+    /// Off x86-64 no `Row` can be made.
+    #[cfg(not(target_arch = "x86_64"))]
+    never: std::convert::Infallible,
+}
+
+impl<'a> Row<'a> {
+    /// The loops' inputs, or `None` where the CPU lacks AVX2 (or is not x86-64).
+    pub(crate) fn new(
+        family: &'a Family,
+        packed: &'a [Packed],
+        delta: f64,
+        dw: Option<&'a [[f64; 2]]>,
+    ) -> Option<Self> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            available().then_some(Row {
+                family,
+                packed,
+                delta,
+                dw,
+            })
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (family, packed, delta, dw);
+            None
+        }
+    }
+
+    /// The isotropic weight's horizon (m).
+    pub(crate) fn delta(self) -> f64 {
+        self.delta
+    }
+
+    /// [`dilatation_avx2`]'s sums and greatest extension (m) over `i`'s bonds that `alive`
+    /// (`i`'s row of bond states, nonzero intact; `None`: every bond) keeps.
+    pub(crate) fn dilatation(self, i: usize, alive: Option<&[u8]>) -> ([f64; 3], f64) {
+        let (sums, most, _) = self.dilatation_with::<false>(i, alive, 0.0);
+        (sums, most)
+    }
+
+    /// [`Row::dilatation`] and the greatest `|delta| |e| (rsum - r)` (m^2 times the weight,
+    /// at least 0) of a plastic row whose own ends are all zero: the bound of the kernel's
+    /// `Yield::all_inside`, `rsum` the particle's `r_min + r_max` (m).
+    pub(crate) fn dilatation_bounded(
+        self,
+        i: usize,
+        alive: Option<&[u8]>,
+        rsum: f64,
+    ) -> ([f64; 3], f64, f64) {
+        self.dilatation_with::<true>(i, alive, rsum)
+    }
+
+    fn dilatation_with<const BOUND: bool>(
+        self,
+        i: usize,
+        alive: Option<&[u8]>,
+        rsum: f64,
+    ) -> ([f64; 3], f64, f64) {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: a `Row` exists only where the CPU has AVX2 (`Row::new`)
+        unsafe {
+            match (alive.filter(|a| has_broken(a)), self.dw.is_some()) {
+                (None, false) => dilatation_avx2::<false, false, BOUND>(self, i, &[], rsum),
+                (None, true) => dilatation_avx2::<false, true, BOUND>(self, i, &[], rsum),
+                (Some(a), false) => dilatation_avx2::<true, false, BOUND>(self, i, a, rsum),
+                (Some(a), true) => dilatation_avx2::<true, true, BOUND>(self, i, a, rsum),
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        match self.never {}
+    }
+
+    /// [`force_avx2`]'s force (N).
+    pub(crate) fn force(self, i: usize, alive: Option<&[u8]>) -> Vec3 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: a `Row` exists only where the CPU has AVX2 (`Row::new`)
+        unsafe {
+            match (alive.filter(|a| has_broken(a)), self.dw.is_some()) {
+                (None, false) => force_avx2::<false, false>(self, i, &[]),
+                (None, true) => force_avx2::<false, true>(self, i, &[]),
+                (Some(a), false) => force_avx2::<true, false>(self, i, a),
+                (Some(a), true) => force_avx2::<true, true>(self, i, a),
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        match self.never {}
+    }
+}
+
+/// `(theta_i, S_i)` from [`Row::dilatation`]'s sums with the dilatation constant `c` (as
+/// [`super::kernel::dilatation`] forms them; `S_i = 0` unless `moment`).
+pub(crate) fn theta_moment(c: f64, [acc, u, m]: [f64; 3], moment: bool) -> (f64, f64) {
+    let theta = c * acc;
+    let (u, m) = if moment { (u, m) } else { (0.0, 0.0) };
+    (theta, u - theta * m / 3.0)
+}
+
+/// Whether this CPU runs the lane loops.
+pub(crate) fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// `(sum_j d_ij V_j e_ij, sum_j delta V_j e_ij, sum_j delta V_j r_ij)` over particle `i`'s
+/// intact bonds, `d_ij = delta / r_ij` without fitted weights: the three sums of
+/// [`super::kernel::dilatation`] with no plastic extension; the greatest extension summed (m;
+/// minus infinity with none); with `BOUND`, the greatest `|delta| |e| (rsum - r)` (else 0).
+/// Reads the packed records' `at`. With `MASKED`, `alive` is `i`'s row of bond states
+/// (nonzero intact); without, every bond is.
+///
+/// # Safety
+/// The CPU must have AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn dilatation_avx2<const MASKED: bool, const SPLIT: bool, const BOUND: bool>(
+    row: Row,
+    i: usize,
+    alive: &[u8],
+    rsum: f64,
+) -> ([f64; 3], f64, f64) {
+    let fam = row.family;
+    let (nb, rl) = (fam.neighbours(), fam.rest_lengths());
+    let at = row.packed[i].at;
+    let yi = [at[0], at[1], at[2]];
+    let yi4 = yi.map(|c| _mm256_set1_pd(c));
+    let delta = _mm256_set1_pd(row.delta);
+    let (wabs4, rsum4) = (_mm256_set1_pd(row.delta.abs()), _mm256_set1_pd(rsum));
+    let sign = _mm256_set1_pd(-0.0);
+    let dw = row.dw.unwrap_or_default();
+    let range = fam.range(i);
+    let first = range.start;
+    let mut acc = _mm256_setzero_pd();
+    let mut most4 = _mm256_set1_pd(f64::NEG_INFINITY);
+    let mut x4 = _mm256_setzero_pd();
+    let mut tail = Tail {
+        most: f64::NEG_INFINITY,
+        x: 0.0,
+    };
+    let mut k = range.start;
+    while k + 4 <= range.end {
+        let dead = dead_lanes::<MASKED>(alive, k - first);
+        let [x, y, z, v] = gather(row.packed, &nb[k..k + 4], |p| &p.at);
+        let r = _mm256_loadu_pd(rl[k..k + 4].as_ptr());
+        let eta = [
+            _mm256_sub_pd(x, yi4[0]),
+            _mm256_sub_pd(y, yi4[1]),
+            _mm256_sub_pd(z, yi4[2]),
+        ];
+        let e = _mm256_sub_pd(length(eta), r);
+        // e > most ? e : most, lane by lane: a NaN extension is left out, as in the kernel; a
+        // broken bond's as minus infinity
+        let live_e = if MASKED {
+            _mm256_blendv_pd(e, _mm256_set1_pd(f64::NEG_INFINITY), dead)
+        } else {
+            e
+        };
+        most4 = _mm256_max_pd(live_e, most4);
+        if BOUND {
+            // |wr| |e| (rsum - r), as `OwnSums::add` forms it (abs: the sign bit cleared)
+            let b = _mm256_mul_pd(
+                _mm256_mul_pd(wabs4, _mm256_andnot_pd(sign, e)),
+                _mm256_sub_pd(rsum4, r),
+            );
+            x4 = _mm256_max_pd(drop_dead::<MASKED>(dead, b), x4);
+        }
+        let d = if SPLIT {
+            own_weights(&dw[k..k + 4]).0
+        } else {
+            _mm256_div_pd(delta, r)
+        };
+        let wrv = _mm256_mul_pd(delta, v);
+        let term = _mm256_mul_pd(_mm256_mul_pd(d, v), e);
+        acc = add_in_order(
+            acc,
+            drop_dead::<MASKED>(dead, term),
+            drop_dead::<MASKED>(dead, _mm256_mul_pd(wrv, e)),
+            drop_dead::<MASKED>(dead, _mm256_mul_pd(wrv, r)),
+        );
+        k += 4;
+    }
+    let mut out = unpack(acc);
+    for k in k..range.end {
+        if MASKED && alive[k - first] == 0 {
+            continue;
+        }
+        let (e, t) = dilatation_bond(row, yi, k);
+        tail.add::<BOUND>(row.delta, e, rsum, fam.rest_lengths()[k]);
+        for (o, t) in out.iter_mut().zip(t) {
+            *o += t;
+        }
+    }
+    // the greatest of the lanes' and the rest's (the order of a maximum is immaterial)
+    for l in unpack4(most4) {
+        tail.most = if l > tail.most { l } else { tail.most };
+    }
+    for l in unpack4(x4) {
+        tail.x = if l > tail.x { l } else { tail.x };
+    }
+    (out, tail.most, tail.x)
+}
+
+/// The maxima of [`dilatation_avx2`] over the bonds it takes one at a time.
+struct Tail {
+    most: f64,
+    x: f64,
+}
+
+impl Tail {
+    /// Takes a bond of extension `e` and rest length `r` (m); `BOUND` as in [`dilatation_avx2`].
+    #[inline(always)]
+    fn add<const BOUND: bool>(&mut self, delta: f64, e: f64, rsum: f64, r: f64) {
+        self.most = if e > self.most { e } else { self.most };
+        if BOUND {
+            let x = delta.abs() * e.abs() * (rsum - r);
+            self.x = if x > self.x { x } else { self.x };
+        }
+    }
+}
+
+/// Bond `k`'s extension (m) and its terms of [`dilatation_avx2`]' three sums, as the scalar
+/// loop computes them.
+#[inline(always)]
+fn dilatation_bond(row: Row, yi: Vec3, k: usize) -> (f64, [f64; 3]) {
+    let fam = row.family;
+    let at = row.packed[fam.neighbours()[k] as usize].at;
+    let r = fam.rest_lengths()[k];
+    let vj = at[3];
+    let e = crate::math::norm(crate::math::sub([at[0], at[1], at[2]], yi)) - r;
+    let d = match row.dw {
+        Some(dw) => dw[k][0],
+        None => row.delta / r,
+    };
+    let wrv = row.delta * vj;
+    (e, [d * vj * e, wrv * e, wrv * r])
+}
+
+/// Force on particle `i` (N) of [`super::kernel::force`] with no plastic extension, from the
+/// packed records (both halves filled), over the bonds `alive` (`i`'s row of bond states,
+/// nonzero intact; `None` when every bond is).
+///
+/// # Safety
+/// The CPU must have AVX2 ([`available`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn force_avx2<const MASKED: bool, const SPLIT: bool>(
+    row: Row,
+    i: usize,
+    alive: &[u8],
+) -> Vec3 {
+    let fam = row.family;
+    let (nb, rl) = (fam.neighbours(), fam.rest_lengths());
+    let own = row.packed[i];
+    let Packed { at, pq } = own;
+    let yi4 = [0, 1, 2].map(|c| _mm256_set1_pd(at[c]));
+    let [pi, qi, bi, _] = pq;
+    let (pi4, qi4, bi4, vi4) = (
+        _mm256_set1_pd(pi),
+        _mm256_set1_pd(qi),
+        _mm256_set1_pd(bi),
+        _mm256_set1_pd(at[3]),
+    );
+    let delta = _mm256_set1_pd(row.delta);
+    let two = _mm256_set1_pd(2.0);
+    let one = _mm256_set1_pd(1.0);
+    let dw = row.dw.unwrap_or_default();
+    let range = fam.range(i);
+    let first = range.start;
+    let mut acc = _mm256_setzero_pd();
+    let mut k = range.start;
+    while k + 4 <= range.end {
+        let dead = dead_lanes::<MASKED>(alive, k - first);
+        let j = &nb[k..k + 4];
+        let [x, y, z, vj] = gather(row.packed, j, |p| &p.at);
+        let [pj, qj, bj, _] = gather(row.packed, j, |p| &p.pq);
+        let r = _mm256_loadu_pd(rl[k..k + 4].as_ptr());
+        let eta = [
+            _mm256_sub_pd(x, yi4[0]),
+            _mm256_sub_pd(y, yi4[1]),
+            _mm256_sub_pd(z, yi4[2]),
+        ];
+        let len = length(eta);
+        let e = _mm256_sub_pd(len, r);
+        let inv = _mm256_div_pd(one, _mm256_mul_pd(r, len));
+        let bsum = _mm256_add_pd(_mm256_mul_pd(bi4, e), _mm256_mul_pd(bj, e));
+        let qr = _mm256_mul_pd(_mm256_add_pd(qi4, qj), r);
+        let t = if SPLIT {
+            let (dij, dji) = own_weights(&dw[k..k + 4]);
+            _mm256_add_pd(
+                _mm256_mul_pd(
+                    r,
+                    _mm256_add_pd(_mm256_mul_pd(dij, pi4), _mm256_mul_pd(dji, pj)),
+                ),
+                _mm256_mul_pd(delta, _mm256_sub_pd(bsum, qr)),
+            )
+        } else {
+            _mm256_mul_pd(
+                delta,
+                _mm256_sub_pd(_mm256_add_pd(_mm256_add_pd(pi4, pj), bsum), qr),
+            )
+        };
+        let vv = _mm256_mul_pd(vi4, vj);
+        let s = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(two, t), vv), inv);
+        acc = add_in_order(
+            acc,
+            drop_dead::<MASKED>(dead, _mm256_mul_pd(s, eta[0])),
+            drop_dead::<MASKED>(dead, _mm256_mul_pd(s, eta[1])),
+            drop_dead::<MASKED>(dead, _mm256_mul_pd(s, eta[2])),
+        );
+        k += 4;
+    }
+    let mut out = unpack(acc);
+    for k in k..range.end {
+        if MASKED && alive[k - first] == 0 {
+            continue;
+        }
+        for (o, f) in out.iter_mut().zip(force_bond(row, own, k)) {
+            *o += f;
+        }
+    }
+    out
+}
+
+/// Bond `k`'s term `s eta` of [`force`] for the particle whose record is `own`, as the scalar
+/// loop computes it.
+#[inline(always)]
+fn force_bond(row: Row, own: Packed, k: usize) -> Vec3 {
+    let fam = row.family;
+    let Packed { at, pq } = row.packed[fam.neighbours()[k] as usize];
+    let [pi, qi, bi, _] = own.pq;
+    let r = fam.rest_lengths()[k];
+    let eta = crate::math::sub([at[0], at[1], at[2]], [own.at[0], own.at[1], own.at[2]]);
+    let l = crate::math::norm(eta);
+    let e = l - r;
+    let [pj, qj, bj, _] = pq;
+    let inv = 1.0 / (r * l);
+    let bsum = bi * e + bj * e;
+    let t = match row.dw {
+        Some(dw) => {
+            let [dij, dji] = dw[k];
+            r * (dij * pi + dji * pj) + row.delta * (bsum - (qi + qj) * r)
+        }
+        None => row.delta * ((pi + pj) + bsum - (qi + qj) * r),
+    };
+    let s = 2.0 * t * (own.at[3] * at[3]) * inv;
+    [s * eta[0], s * eta[1], s * eta[2]]
+}
+
+/// Whether a row of bond states holds a broken bond (0): rows without take the loops that
+/// read no state.
+#[inline(always)]
+fn has_broken(alive: &[u8]) -> bool {
+    alive.iter().fold(false, |any, &s| any | (s == 0))
+}
+
+/// All ones in the lanes of the four bonds from offset `o` of the row whose state in `alive`
+/// is 0 (broken), zeros elsewhere; all zeros without `MASKED`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn dead_lanes<const MASKED: bool>(alive: &[u8], o: usize) -> __m256d {
+    if !MASKED {
+        return _mm256_setzero_pd();
+    }
+    let s = &alive[o..o + 4];
+    let w = i32::from_ne_bytes([s[0], s[1], s[2], s[3]]);
+    let states = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(w));
+    _mm256_castsi256_pd(_mm256_cmpeq_epi64(states, _mm256_setzero_si256()))
+}
+
+/// `v` with the `dead` lanes `+0.0`. Adding `+0.0` leaves a running sum as it is, bit for bit,
+/// when the sum is not `-0.0`, and one that starts at `+0.0` never is (round to nearest gives
+/// `-0.0` only for two of them): so a broken bond's lane counts as the scalar loop's skipping
+/// it, whatever its terms are (even NaN).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn drop_dead<const MASKED: bool>(dead: __m256d, v: __m256d) -> __m256d {
+    if MASKED {
+        _mm256_andnot_pd(dead, v)
+    } else {
+        v
+    }
+}
+
+/// The four-vectors `half(packed[j_l])` of the neighbours `j_0..j_3`, transposed: component
+/// `c` of every lane in vector `c`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn gather(
+    packed: &[Packed],
+    j: &[u32],
+    half: impl Fn(&Packed) -> &[f64; 4],
+) -> [__m256d; 4] {
+    let row = |l: usize| _mm256_loadu_pd(half(&packed[j[l] as usize]).as_ptr());
+    let (r0, r1, r2, r3) = (row(0), row(1), row(2), row(3));
+    let t0 = _mm256_unpacklo_pd(r0, r1); // x0 x1 z0 z1
+    let t1 = _mm256_unpackhi_pd(r0, r1); // y0 y1 w0 w1
+    let t2 = _mm256_unpacklo_pd(r2, r3); // x2 x3 z2 z3
+    let t3 = _mm256_unpackhi_pd(r2, r3); // y2 y3 w2 w3
+    [
+        _mm256_permute2f128_pd(t0, t2, 0x20),
+        _mm256_permute2f128_pd(t1, t3, 0x20),
+        _mm256_permute2f128_pd(t0, t2, 0x31),
+        _mm256_permute2f128_pd(t1, t3, 0x31),
+    ]
+}
+
+/// `(d_ij, d_ji)` of four consecutive bonds, one vector each.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn own_weights(dw: &[[f64; 2]]) -> (__m256d, __m256d) {
+    let a = _mm256_loadu_pd(dw[0..2].as_ptr().cast()); // i0 r0 i1 r1
+    let b = _mm256_loadu_pd(dw[2..4].as_ptr().cast()); // i2 r2 i3 r3
+                                                       // i0 i2 i1 i3 -> i0 i1 i2 i3
+    let ij = _mm256_permute4x64_pd(_mm256_unpacklo_pd(a, b), 0b11_01_10_00);
+    let ji = _mm256_permute4x64_pd(_mm256_unpackhi_pd(a, b), 0b11_01_10_00);
+    (ij, ji)
+}
+
+/// `sqrt((x^2 + y^2) + z^2)` lane by lane, as [`crate::math::norm`] sums it.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn length(v: [__m256d; 3]) -> __m256d {
+    _mm256_sqrt_pd(_mm256_add_pd(
+        _mm256_add_pd(_mm256_mul_pd(v[0], v[0]), _mm256_mul_pd(v[1], v[1])),
+        _mm256_mul_pd(v[2], v[2]),
+    ))
+}
+
+/// `acc + (a_l, b_l, c_l, 0)` for the lanes `l = 0..3` in turn: three running sums (in `acc`'s
+/// first three lanes) taking four bonds' terms in bond order, as the scalar loop does.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn add_in_order(acc: __m256d, a: __m256d, b: __m256d, c: __m256d) -> __m256d {
+    let z = _mm256_setzero_pd();
+    let ab_lo = _mm256_unpacklo_pd(a, b); // a0 b0 a2 b2
+    let ab_hi = _mm256_unpackhi_pd(a, b); // a1 b1 a3 b3
+    let c_lo = _mm256_unpacklo_pd(c, z); // c0 0 c2 0
+    let c_hi = _mm256_unpackhi_pd(c, z); // c1 0 c3 0
+    let acc = _mm256_add_pd(acc, _mm256_permute2f128_pd(ab_lo, c_lo, 0x20));
+    let acc = _mm256_add_pd(acc, _mm256_permute2f128_pd(ab_hi, c_hi, 0x20));
+    let acc = _mm256_add_pd(acc, _mm256_permute2f128_pd(ab_lo, c_lo, 0x31));
+    _mm256_add_pd(acc, _mm256_permute2f128_pd(ab_hi, c_hi, 0x31))
+}
+
+/// The four lanes of `v`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn unpack4(v: __m256d) -> [f64; 4] {
+    let hi = _mm256_permute2f128_pd(v, v, 0x11);
+    [
+        _mm256_cvtsd_f64(v),
+        _mm256_cvtsd_f64(_mm256_permute_pd(v, 1)),
+        _mm256_cvtsd_f64(hi),
+        _mm256_cvtsd_f64(_mm256_permute_pd(hi, 1)),
+    ]
+}
+
+/// The first three lanes of `v`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+fn unpack(v: __m256d) -> [f64; 3] {
+    [
+        _mm256_cvtsd_f64(v),
+        _mm256_cvtsd_f64(_mm256_permute_pd(v, 1)),
+        _mm256_cvtsd_f64(_mm256_permute2f128_pd(v, v, 0x11)),
+    ]
+}
