@@ -295,9 +295,9 @@ fn dilatation_most<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
 /// and the sums are the check's to the bit. Only a particle with a bond near breaking walks
 /// again with the check: a branch a bond on the extension costs more than the second walk of
 /// the few particles near a crack.
-#[inline(always)]
 ///
 /// `lanes`, when given (the isotropic weight, `w`'s own), takes the first walk.
+#[inline(always)]
 pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
     inp: Inputs,
     w: W,
