@@ -133,7 +133,7 @@ pub fn stable_frequency_memo(
 }
 
 /// A deterministic start vector with all modes present (fixed-seed xorshift in [-0.5, 0.5)).
-fn start_vector(n: usize) -> Vec<Vec3> {
+pub(crate) fn start_vector(n: usize) -> Vec<Vec3> {
     let mut state = 0x9e37_79b9_7f4a_7c15_u64;
     let mut next = || {
         state ^= state << 13;

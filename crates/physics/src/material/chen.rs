@@ -684,7 +684,10 @@ impl ChenModel {
 
     /// Recomputes `theta` at `y` with the plastic extensions as they are, then `pq`.
     fn dilatation_pass(&mut self, y: &[Vec3]) {
-        self.pack_positions(y);
+        if self.ep.is_none() {
+            // a plastic model's dilatation pass (a trial, the energy) keeps the scalar loops
+            self.pack_positions(y);
+        }
         let s = &self.setup;
         let inp = s.inputs(y);
         if let Some(row) = s.lane_row(&self.packed).filter(|_| self.ep.is_none()) {

@@ -549,7 +549,7 @@ fn lanes_inside(
 ) -> Option<([f64; 4], f64)> {
     let l = lanes.filter(|_| hint.clean && hint.pairs_clean && !hint.yielded)?;
     let ([acc, u, m], most, x) = l.dilatation_bounded(i, alive, yp.rsum(i));
-    let theta = inp.c_theta[i] * acc;
+    let (theta, moment) = theta_moment(inp.c_theta[i], [acc, u, m], true);
     // the weight is isotropic: |omega r| = delta on every bond (the bound is the same with it
     // where the row has no bond: theta is then 0)
     let sums = OwnSums {
@@ -559,7 +559,7 @@ fn lanes_inside(
         wr_max: l.delta().abs(),
     };
     yp.all_inside(i, &sums, theta)
-        .then(|| ([theta, u - theta * m / 3.0, 0.0, 0.0], most))
+        .then_some(([theta, moment, 0.0, 0.0], most))
 }
 
 /// What a plastic first pass knows of particle `i` before its first loop.
@@ -878,20 +878,11 @@ fn force_with<W: Weights, D: Alive>(
         let e = l - r;
         let [pj, qj] = pq[j];
         let s = if let Some(delta) = w.isotropic() {
-            // omega = delta / r both ways, so r (A_ij + A_ji) / 4 needs no division and one
-            // reciprocal of r l serves both (the weight's and the direction's): two divisions a
-            // bond become one. Every sum and product pairs the two ends' terms commutatively,
-            // so the pair scalar is bitwise the same from both ends, as in the general branch.
-            let inv = 1.0 / (r * l);
-            let (epij, epji) = ep_of(k, j, e, r);
-            let bsum = bi * (e - epij) + coef_b[j] * (e - epji);
-            let t = if W::SPLIT {
-                let (dij, dji) = w.dil_pair(k, r);
-                r * (dij * pi + dji * pj) + delta * (bsum - (qi + qj) * r)
-            } else {
-                delta * ((pi + pj) + bsum - (qi + qj) * r)
-            };
-            2.0 * t * (vi * inp.volumes[j]) * inv
+            // one reciprocal a bond in place of two divisions (`isotropic_pair`)
+            let ep = ep_of(k, j, e, r);
+            let dil = W::SPLIT.then(|| w.dil_pair(k, r));
+            let ends = [[pi, qi, bi], [pj, qj, coef_b[j]]];
+            isotropic_pair(delta, r, l, ends, ep, dil, vi * inp.volumes[j])
         } else {
             let (wij, wji) = w.pair(k, r);
             let (epij, epji) = ep_of(k, j, e, r);
@@ -917,6 +908,34 @@ fn force_with<W: Weights, D: Alive>(
         acc[2] += s * eta[2];
     }
     acc
+}
+
+/// The pair scalar `s` (the force on `i` is `s eta` summed) of a bond with the isotropic weight
+/// `omega = delta / r` both ways: rest length `r` and length `l` (m), `ends` the two ends'
+/// `[p, q, b]`, plastic extensions `(ep_ij, ep_ji)` (m), the fitted dilatation weights
+/// `(d_ij, d_ji)` when used, and `vv = V_i V_j` (m^6). `r (A_ij + A_ji) / 4` needs no division,
+/// and one reciprocal of `r l` serves both the weight and the direction. Every sum and product
+/// pairs the two ends' terms commutatively, so `s` is bitwise the same from both ends. The
+/// scalar loops' own formula, the vector loops' (`lanes.rs`) model and their tails'.
+#[inline(always)]
+pub(crate) fn isotropic_pair(
+    delta: f64,
+    r: f64,
+    l: f64,
+    ends: [[f64; 3]; 2],
+    (epij, epji): (f64, f64),
+    dil: Option<(f64, f64)>,
+    vv: f64,
+) -> f64 {
+    let [[pi, qi, bi], [pj, qj, bj]] = ends;
+    let e = l - r;
+    let inv = 1.0 / (r * l);
+    let bsum = bi * (e - epij) + bj * (e - epji);
+    let t = match dil {
+        Some((dij, dji)) => r * (dij * pi + dji * pj) + delta * (bsum - (qi + qj) * r),
+        None => delta * ((pi + pj) + bsum - (qi + qj) * r),
+    };
+    2.0 * t * vv * inv
 }
 
 /// Elastic energy density `W_i = kappa_i theta_i^2 / 2 + b_i sum_j omega_ij (ed_ij - ep_ij)^2 V_j`

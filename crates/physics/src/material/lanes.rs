@@ -9,6 +9,7 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
+use super::kernel::isotropic_pair;
 use crate::family::Family;
 use crate::math::Vec3;
 
@@ -362,7 +363,7 @@ unsafe fn force_avx2<const MASKED: bool, const SPLIT: bool>(
     out
 }
 
-/// Bond `k`'s term `s eta` of [`force`] for the particle whose record is `own`, as the scalar
+/// Bond `k`'s term `s eta` of [`force_avx2`] for the particle whose record is `own`, as the scalar
 /// loop computes it.
 #[inline(always)]
 fn force_bond(row: Row, own: Packed, k: usize) -> Vec3 {
@@ -372,18 +373,10 @@ fn force_bond(row: Row, own: Packed, k: usize) -> Vec3 {
     let r = fam.rest_lengths()[k];
     let eta = crate::math::sub([at[0], at[1], at[2]], [own.at[0], own.at[1], own.at[2]]);
     let l = crate::math::norm(eta);
-    let e = l - r;
     let [pj, qj, bj, _] = pq;
-    let inv = 1.0 / (r * l);
-    let bsum = bi * e + bj * e;
-    let t = match row.dw {
-        Some(dw) => {
-            let [dij, dji] = dw[k];
-            r * (dij * pi + dji * pj) + row.delta * (bsum - (qi + qj) * r)
-        }
-        None => row.delta * ((pi + pj) + bsum - (qi + qj) * r),
-    };
-    let s = 2.0 * t * (own.at[3] * at[3]) * inv;
+    let ends = [[pi, qi, bi], [pj, qj, bj]];
+    let dil = row.dw.map(|dw| (dw[k][0], dw[k][1]));
+    let s = isotropic_pair(row.delta, r, l, ends, (0.0, 0.0), dil, own.at[3] * at[3]);
     [s * eta[0], s * eta[1], s * eta[2]]
 }
 
