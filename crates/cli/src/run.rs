@@ -50,7 +50,8 @@ pub struct RunArgs {
     pub quiet: bool,
     /// Neither recall nor keep the stable-step estimate in the cache directory
     /// ($PERIFRAC_CACHE, else $XDG_CACHE_HOME/perifrac, else ~/.cache/perifrac), where a run
-    /// of a model built before finds it after two force evaluations (same bits, same output).
+    /// of a model built before finds it after one or two force evaluations (same bits, same
+    /// output).
     #[arg(long)]
     pub no_cache: bool,
 }

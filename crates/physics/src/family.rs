@@ -45,19 +45,46 @@ impl Family {
         let n = positions.len();
         let (walk_off, walk_nb) = walk_all(positions, adjacency, horizon)?;
         let row = |i: usize| &walk_nb[walk_off[i] as usize..walk_off[i + 1] as usize];
-        // Symmetrise: a pair found by one walk only is added to the other row.
-        let mut extra: Vec<(u32, u32)> = (0..n)
+        // Each pair found by both walks is named twice, once from each end; one found by a
+        // single walk, once. So the rows name as many pairs below their own index as above
+        // when the walks agree, and a hash of each pair (ends in order) cancels out of the
+        // rows' exclusive-or: both hold unless the walks differ, for a set of pairs whose
+        // hashes happen to cancel (one chance in 2^64 for a hash spread as the one below,
+        // and never for a single pair, which the counts catch). They are read in one pass over
+        // the rows in order; otherwise every pair is searched for from its other end.
+        let (below, above, hash) = (0..n)
             .into_par_iter()
-            .flat_map_iter(|i| {
-                row(i).iter().enumerate().filter_map(move |(p, &j)| {
-                    let back = row(j as usize);
-                    // j is p-th nearest index of i's row: i sits about as far from the end of
-                    // j's (neighbourhoods alike, indices spatially ordered), found from there
-                    let guess = back.len().saturating_sub(p + 1);
-                    (!contains_near(back, i as u32, guess)).then_some((j, i as u32))
+            .map(|i| {
+                row(i).iter().fold((0usize, 0usize, 0u64), |(b, a, h), &j| {
+                    let low = (j as usize) < i;
+                    let (lo, hi) = if low { (j, i as u32) } else { (i as u32, j) };
+                    (
+                        b + usize::from(low),
+                        a + usize::from(!low),
+                        h ^ pair_hash(lo, hi),
+                    )
                 })
             })
-            .collect();
+            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 ^ b.2));
+        // Symmetrise: a pair found by one walk only is added to the other row.
+        let mut extra: Vec<(u32, u32)> = if below == above && hash == 0 {
+            Vec::new()
+        } else {
+            // j is the p-th nearest index of i's row: i sits about as far from the end of j's
+            // (neighbourhoods alike, indices spatially ordered), searched from there
+            let found_back = |i: usize, p: usize, j: u32| {
+                let back = row(j as usize);
+                contains_near(back, i as u32, back.len().saturating_sub(p + 1))
+            };
+            (0..n)
+                .into_par_iter()
+                .flat_map_iter(|i| {
+                    let r = row(i);
+                    (0..r.len())
+                        .filter_map(move |p| (!found_back(i, p, r[p])).then_some((r[p], i as u32)))
+                })
+                .collect()
+        };
         extra.par_sort_unstable();
         let total = walk_nb.len() + extra.len();
         if total > u32::MAX as usize {
@@ -203,6 +230,16 @@ impl Family {
     }
 }
 
+/// A hash of the pair `(lo, hi)` spread over 64 bits (SplitMix64's finaliser: a bijection
+/// of the packed pair, so distinct pairs hash apart).
+#[inline]
+fn pair_hash(lo: u32, hi: u32) -> u64 {
+    let mut x = ((lo as u64) << 32 | hi as u64) ^ 0x9e37_79b9_7f4a_7c15;
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
 /// Whether the sorted `row` holds `v`, searched outward from index `guess` in doubling steps,
 /// then by bisection within the bracket found: a few reads when the guess is close, never
 /// more than twice a plain bisection's.
@@ -235,9 +272,90 @@ fn contains_near(row: &[u32], v: u32, guess: usize) -> bool {
 /// Particles a walk task takes in turn: one growing buffer for all their rows.
 const WALK_CHUNK: usize = 256;
 
+/// A walk task's reusable state: the tet last stamped by each walk, the walk's queue, and a
+/// bit per particle marking the current walk's finds.
+struct Walker {
+    stamp: Vec<u32>,
+    queue: Vec<u32>,
+    bits: Vec<u64>,
+}
+
+impl Walker {
+    fn new(n: usize) -> Walker {
+        Walker {
+            stamp: vec![u32::MAX; n],
+            queue: Vec::new(),
+            bits: vec![0; n.div_ceil(64)],
+        }
+    }
+
+    /// Walks from particle `i`, appending the particles found inside the ball of radius
+    /// `sqrt(h2)` to `found`, sorted. The finds are marked in `bits` as well: where they span
+    /// fewer words than twice their number (indices spatially ordered, as a lattice's or a
+    /// mesher's are), reading the words back in order sorts them in one sweep; elsewhere a
+    /// comparison sort does.
+    fn walk(
+        &mut self,
+        i: usize,
+        positions: &[Vec3],
+        adjacency: &[[u32; 4]],
+        h2: f64,
+        found: &mut Vec<u32>,
+    ) {
+        let Walker { stamp, queue, bits } = self;
+        let xi = positions[i];
+        let start = found.len();
+        let (mut lo, mut hi) = (usize::MAX, 0);
+        queue.clear();
+        queue.push(i as u32);
+        stamp[i] = i as u32;
+        let mut head = 0;
+        while head < queue.len() {
+            let t = queue[head] as usize;
+            head += 1;
+            for &u in &adjacency[t] {
+                if u == NO_NEIGHBOUR || stamp[u as usize] == i as u32 {
+                    continue;
+                }
+                stamp[u as usize] = i as u32;
+                if norm_squared(sub(positions[u as usize], xi)) < h2 {
+                    queue.push(u);
+                    found.push(u);
+                    let w = u as usize / 64;
+                    bits[w] |= 1 << (u % 64);
+                    lo = lo.min(w);
+                    hi = hi.max(w);
+                }
+            }
+        }
+        let row = &mut found[start..];
+        if row.is_empty() {
+            return;
+        }
+        if hi - lo < 2 * row.len() {
+            // each find set one bit: the words hold exactly `row.len()` of them
+            let mut at = 0;
+            for (w, word) in (lo..).zip(&mut bits[lo..=hi]) {
+                let mut b = std::mem::take(word);
+                while b != 0 {
+                    row[at] = (w * 64) as u32 + b.trailing_zeros();
+                    at += 1;
+                    b &= b - 1;
+                }
+            }
+        } else {
+            for &u in row.iter() {
+                bits[u as usize / 64] = 0;
+            }
+            row.sort_unstable();
+        }
+    }
+}
+
 /// One breadth-first walk per particle, each row sorted, as CSR (row offsets, neighbours):
 /// each task walks [`WALK_CHUNK`] particles into one buffer, so the rows are neither allocated
-/// one by one nor left scattered over the heap when they are freed.
+/// one by one nor left scattered over the heap when they are freed; the buffers are then
+/// copied into place in parallel.
 fn walk_all(
     positions: &[Vec3],
     adjacency: &[[u32; 4]],
@@ -248,31 +366,12 @@ fn walk_all(
     let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(WALK_CHUNK))
         .into_par_iter()
         .map_init(
-            || (vec![u32::MAX; n], Vec::<u32>::new()),
-            |(stamp, queue), c| {
+            || Walker::new(n),
+            |walker, c| {
                 let (mut lens, mut found) = (Vec::with_capacity(WALK_CHUNK), Vec::new());
                 for i in c * WALK_CHUNK..n.min((c + 1) * WALK_CHUNK) {
-                    let xi = positions[i];
                     let start = found.len();
-                    queue.clear();
-                    queue.push(i as u32);
-                    stamp[i] = i as u32;
-                    let mut head = 0;
-                    while head < queue.len() {
-                        let t = queue[head] as usize;
-                        head += 1;
-                        for &u in &adjacency[t] {
-                            if u == NO_NEIGHBOUR || stamp[u as usize] == i as u32 {
-                                continue;
-                            }
-                            stamp[u as usize] = i as u32;
-                            if norm_squared(sub(positions[u as usize], xi)) < h2 {
-                                queue.push(u);
-                                found.push(u);
-                            }
-                        }
-                    }
-                    found[start..].sort_unstable();
+                    walker.walk(i, positions, adjacency, h2, &mut found);
                     lens.push((found.len() - start) as u32);
                 }
                 (lens, found)
@@ -285,12 +384,22 @@ fn walk_all(
     }
     let mut offsets = Vec::with_capacity(n + 1);
     offsets.push(0u32);
-    let mut neighbours = Vec::with_capacity(total);
-    for (lens, found) in chunks {
+    for (lens, _) in &chunks {
         for len in lens {
             offsets.push(offsets[offsets.len() - 1] + len);
         }
-        neighbours.extend_from_slice(&found);
     }
+    let mut neighbours = vec![0u32; total];
+    let mut rest = neighbours.as_mut_slice();
+    let mut slices = Vec::with_capacity(chunks.len());
+    for (_, found) in &chunks {
+        let (head, tail) = rest.split_at_mut(found.len());
+        slices.push(head);
+        rest = tail;
+    }
+    slices
+        .into_par_iter()
+        .zip(&chunks)
+        .for_each(|(out, (_, found))| out.copy_from_slice(found));
     Ok((offsets, neighbours))
 }

@@ -18,8 +18,8 @@ pub struct FrequencyEstimate {
     /// Relative change of `omega^2` in the last iteration.
     pub last_change: f64,
     /// Whether the estimate was recalled from an [`EstimateMemo`] (then `evaluations` counts
-    /// only the two that identified the operator; `iterations` and `last_change` are those of
-    /// the run that stored it).
+    /// only those that identified the operator, one or two; `iterations` and `last_change` are
+    /// those of the run that stored it).
     pub recalled: bool,
 }
 
@@ -106,8 +106,10 @@ pub fn stable_frequency(
 }
 
 /// [`stable_frequency`], recalling the estimate from `memo` when the same iteration on the
-/// same operator was stored there (two force evaluations in place of all of them; the result
-/// is the stored one bit for bit) and storing it there otherwise.
+/// same operator was stored there (the result is the stored one bit for bit) and storing it
+/// there otherwise. Where the model vouches that its forces at `rest` vanish
+/// ([`ForceModel::forces_vanish_at`]) they are not evaluated: a recalled estimate then costs one
+/// force evaluation, an iterated one an evaluation less.
 pub fn stable_frequency_memo(
     model: &mut dyn ForceModel,
     rest: &[Vec3],
@@ -115,12 +117,12 @@ pub fn stable_frequency_memo(
     memo: Option<&dyn EstimateMemo>,
 ) -> (f64, FrequencyEstimate) {
     let mass = model.masses().to_vec();
-    let est = lanczos_frequency_of(
+    let at_rest = model.forces_vanish_at(rest);
+    let est = lanczos(
         &mass,
-        rest,
+        (rest, at_rest),
         horizon,
-        LANCZOS_ITERATIONS,
-        LANCZOS_TOLERANCE,
+        (LANCZOS_ITERATIONS, LANCZOS_TOLERANCE),
         &mut |y: &[Vec3], f: &mut [Vec3]| model.trial_forces(y, f),
         memo,
     );
@@ -276,6 +278,21 @@ pub fn lanczos_frequency_of(
     forces: &mut dyn FnMut(&[Vec3], &mut [Vec3]),
     memo: Option<&dyn EstimateMemo>,
 ) -> FrequencyEstimate {
+    let settings = (max_iterations, tolerance);
+    lanczos(mass, (y0, false), length, settings, forces, memo)
+}
+
+/// [`lanczos_frequency_of`], told whether the forces at `y0` vanish (`at_rest`,
+/// [`ForceModel::forces_vanish_at`]): then they are taken as zeros, not evaluated, and a
+/// recalled estimate costs one evaluation.
+fn lanczos(
+    mass: &[f64],
+    (y0, at_rest): (&[Vec3], bool),
+    length: f64,
+    (max_iterations, tolerance): (usize, f64),
+    forces: &mut dyn FnMut(&[Vec3], &mut [Vec3]),
+    memo: Option<&dyn EstimateMemo>,
+) -> FrequencyEstimate {
     let n = y0.len();
     let mut key = None;
     let mut q = start_vector(n);
@@ -285,7 +302,10 @@ pub fn lanczos_frequency_of(
     let mut w = vec![[0.0; 3]; n];
     let mut y = y0.to_vec();
     let (mut f0, mut f) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
-    forces(y0, &mut f0);
+    if !at_rest {
+        forces(y0, &mut f0);
+    }
+    let spent = usize::from(!at_rest);
     let (mut alphas, mut betas) = (Vec::new(), Vec::new());
     let (mut theta, mut beta) = (0.0, 0.0);
     let mut change = f64::INFINITY;
@@ -324,7 +344,7 @@ pub fn lanczos_frequency_of(
                 |s: &FrequencyEstimate| s.omega_max * s.omega_max >= alpha * (1.0 - 1e-12);
             if let Some(stored) = memo.recall(k).filter(credible) {
                 return FrequencyEstimate {
-                    evaluations: 2,
+                    evaluations: 1 + spent,
                     recalled: true,
                     ..stored
                 };
@@ -356,7 +376,7 @@ pub fn lanczos_frequency_of(
     let est = FrequencyEstimate {
         omega_max: theta.max(0.0).sqrt(),
         iterations: it,
-        evaluations: it + 1,
+        evaluations: it + spent,
         last_change: change,
         recalled: false,
     };

@@ -212,3 +212,71 @@ fn asymmetric_walks_are_symmetrised_and_forces_balance() {
     // bitwise antisymmetric pair terms; summation order only
     assert!(norm(net) < 1e-13 * scale);
 }
+
+#[test]
+fn families_do_not_depend_on_the_order_of_the_tets() {
+    // The walk sorts a row by reading back the bits of its finds where their indices lie close
+    // together (a lattice's order), and by comparison elsewhere: shuffled indices take the
+    // second way (rows of 24 to 86 here against 158 words of bits: both ways are taken), and
+    // the bonds must be the same pairs with the same rest lengths.
+    let (v, t) = perifrac_topology::primitives::box_data([0.0; 3], [0.14, 0.12, 0.1], [14, 12, 10]);
+    let (mesh, _) = perifrac_topology::TetMesh::new(v, t).expect("box mesh");
+    let (x, vol, adj) = (
+        mesh.rest_barycentres(),
+        mesh.rest_volumes(),
+        mesh.neighbours(),
+    );
+    let delta = 1.2 * mesh.mean_edge_length();
+    let n = x.len();
+    // a fixed shuffle (Fisher-Yates on a 64-bit LCG): new index `to[t]` of tet `t`
+    let mut to: Vec<usize> = (0..n).collect();
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    for k in (1..n).rev() {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        to.swap(k, (state >> 33) as usize % (k + 1));
+    }
+    let (mut xs, mut vs, mut adjs) = (vec![[0.0; 3]; n], vec![0.0; n], vec![[0u32; 4]; n]);
+    for t in 0..n {
+        xs[to[t]] = x[t];
+        vs[to[t]] = vol[t];
+        adjs[to[t]] = adj[t].map(|u| {
+            if u == NO_NEIGHBOUR {
+                u
+            } else {
+                to[u as usize] as u32
+            }
+        });
+    }
+    let (plain, _) = Discretization::from_tets(&x, &vol, adj, delta).expect("plain");
+    let (shuffled, _) = Discretization::from_tets(&xs, &vs, &adjs, delta).expect("shuffled");
+    let (a, b) = (plain.family(), shuffled.family());
+    let mut from = vec![0u32; n];
+    for (t, &u) in to.iter().enumerate() {
+        from[u] = t as u32;
+    }
+    assert_eq!(a.num_bonds(), b.num_bonds());
+    for (i, &ti) in to.iter().enumerate() {
+        let row = b.row(ti);
+        assert!(row.windows(2).all(|w| w[0] < w[1]), "row {i} sorted");
+        // the shuffled row's pairs, named in the plain order, with their rest lengths
+        let mut back: Vec<(u32, f64)> = b
+            .range(ti)
+            .map(|k| (from[b.neighbours()[k] as usize], b.rest_lengths()[k]))
+            .collect();
+        back.sort_by_key(|&(j, _)| j);
+        let want: Vec<(u32, f64)> = a
+            .range(i)
+            .map(|k| (a.neighbours()[k], a.rest_lengths()[k]))
+            .collect();
+        assert_eq!(back, want, "particle {i}");
+    }
+    let lens = (0..n).map(|i| a.row(i).len());
+    eprintln!(
+        "{n} tets, rows of {} to {}, {} words of bits",
+        lens.clone().min().unwrap_or(0),
+        lens.max().unwrap_or(0),
+        n.div_ceil(64)
+    );
+}

@@ -1,8 +1,9 @@
 //! Stable-step estimates kept between runs: a directory of small text files, one a Lanczos
 //! iteration, named by the key the operator itself writes
 //! ([`perifrac_physics::lanczos_frequency_of`]). A run of a scene whose model was built
-//! before recalls its estimate after two force evaluations instead of running the iteration
-//! again, and gets the same bits, so its output is the same file for file.
+//! before recalls its estimate after one force evaluation (two for a model that cannot vouch
+//! for its forces at rest) instead of running the iteration again, and gets the same bits, so
+//! its output is the same file for file.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;

@@ -40,7 +40,7 @@ pub fn lammps_match(effort: Effort) -> String {
          one. Time per bond update compares the stepping loops; the whole run includes setup \
          (LAMMPS: the wall time outside its loop) and output. perifrac's setup is that of any \
          run of the scene after its first, which recalls the stable-step estimate the first \
-         left in the cache (two force evaluations in place of the iteration; the same bits); \
+         left in the cache (one force evaluation in place of the iteration; the same bits); \
          the first run's setup is given beside it. Peak memory is resident memory, \
          LAMMPS's summed over its ranks (sampled every 20 ms)."
     )

@@ -97,6 +97,8 @@ struct Setup {
     dil_weights: Option<Vec<[f64; 2]>>,
     /// Reverse-bond index, when anisotropic.
     reverse: Option<Vec<u32>>,
+    /// What [`ChenModel::correction`] reports, made with the constants.
+    correction: Correction,
     /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
     yield_params: Option<Vec<(f64, f64)>>,
     /// Per particle `[r_min + r_max (m), 1 / (r_min r_max) (1/m^2), C (1 - margin)]` with
@@ -421,6 +423,8 @@ impl ChenModel {
         let plastic = materials.iter().any(|m| m.plasticity.is_some());
         let fractures = materials.iter().any(ChenMaterial::fractures);
         let reverse = anisotropic.then(|| fam.reverse_index());
+        // per particle, the fit's factor of largest magnitude on its bonds (1 unfitted)
+        let mut worst = vec![1.0; n];
         // d_ij / c_i, so that theta_i = c_i sum_j (d_ij / c_i) e_ij V_j keeps the kernel's form
         // (omega_ij times the fit's factor on the scalar calibration, bounded by FIT_BOUND)
         let dil_weights = options.fitted_dilatation.then(|| {
@@ -449,9 +453,26 @@ impl ChenModel {
             // its own row computes it), no other per-bond array is allocated
             let mut pairs = vec![[0.0; 2]; fam.num_bonds()];
             let wr = w.zip(reverse.as_deref());
-            dilatation_weights(fam, x, wr, delta, &l, &s, FIT_BOUND, &c_theta, &mut pairs);
+            let (l, bound) = (&l, FIT_BOUND);
+            dilatation_weights(
+                fam, x, wr, delta, l, &s, bound, &c_theta, &mut pairs, &mut worst,
+            );
             pairs
         });
+        // the correction's spread over the particles: the dilatation weight's largest over
+        // MODEL.md's (`c_i / c0` times the fit's), and `b_i / b0`
+        let m0 = PI * delta.powi(5);
+        let correction = Correction {
+            dilatation: Spread::of((0..n).map(|i| worst[i] * c_theta[i] / c0).collect()),
+            deviatoric: Spread::of(
+                (0..n)
+                    .map(|i| match moments[i].1 {
+                        m2 if options.calibrated && m2 > 0.0 => m0 / m2,
+                        _ => 1.0,
+                    })
+                    .collect(),
+            ),
+        };
         let yield_params = plastic.then(|| {
             (0..n)
                 .map(|i| {
@@ -500,6 +521,7 @@ impl ChenModel {
                 weights,
                 dil_weights,
                 reverse,
+                correction,
                 yield_params,
                 yield_inside,
                 options,
@@ -639,47 +661,7 @@ impl ChenModel {
     /// largest magnitude among its bonds (`c_i d_ij / (c0 omega_ij)`: `c_i / c0` calibrated,
     /// `n n : L_i / c0` fitted, 1 with neither), and `b_i / b0`.
     pub fn correction(&self) -> Correction {
-        let s = &self.setup;
-        let fam = s.disc.family();
-        let delta = s.disc.horizon();
-        let c0 = 9.0 / (4.0 * PI * delta.powi(4));
-        // One value a particle (not a bond: a paper-sized wall has 41 million bonds), the
-        // factor of largest magnitude on its bonds.
-        let mut dil = vec![0.0; fam.len()];
-        map_particles(&mut dil, |i| {
-            let worst = match &s.dil_weights {
-                Some(d) => fam
-                    .range(i)
-                    .map(|k| {
-                        let w = s
-                            .weights
-                            .as_deref()
-                            .map_or_else(|| delta / fam.rest_lengths()[k], |w| w[k]);
-                        d[k][0] / w
-                    })
-                    .fold(1.0, |a: f64, f| if f.abs() > a.abs() { f } else { a }),
-                None => 1.0,
-            };
-            worst * s.c_theta[i] / c0
-        });
-        Correction {
-            dilatation: Spread::of(dil),
-            deviatoric: Spread::of(self.deviatoric_factors()),
-        }
-    }
-
-    /// `b_i / b0` per particle: `pi delta^5 / sum_j omega_ij r_ij^2 V_j` calibrated, 1 without.
-    fn deviatoric_factors(&self) -> Vec<f64> {
-        let s = &self.setup;
-        let m0 = PI * s.disc.horizon().powi(5);
-        (0..s.disc.len())
-            .map(
-                |i| match family_moments(&s.disc, s.weights.as_deref(), i).1 {
-                    m2 if s.options.calibrated && m2 > 0.0 => m0 / m2,
-                    _ => 1.0,
-                },
-            )
-            .collect()
+        self.setup.correction
     }
 
     /// Recomputes `theta` at `y` with the plastic extensions as they are, then `pq`.
@@ -1010,6 +992,18 @@ impl ForceModel for ChenModel {
         self.add_guard_forces(y, forces);
     }
 
+    fn forces_vanish_at(&self, y: &[Vec3]) -> bool {
+        // Every bond's extension is `|y_j - y_i| - r` with `r` computed from these very
+        // positions, so exactly zero, and so is each dilatation; every force term carries one
+        // of them unless a plastic extension is stored (`ep_rows` marks any that is not +0.0)
+        // or the guard pulls towards its fitted gradients. An evaluation here would break no
+        // bond, yield none, and leave only the plastic passes' hints, which results never
+        // depend on.
+        self.guard.is_none()
+            && self.ep_rows.iter().all(|r| r & OWN_SET == 0)
+            && y == self.setup.disc.rest_positions()
+    }
+
     fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
         self.check_len(y, None);
         self.dilatation_pass(y);
@@ -1096,6 +1090,7 @@ impl ForceModel for ChenModel {
             weights,
             dil_weights,
             reverse,
+            correction: _,
             yield_params,
             yield_inside,
             options: _,

@@ -25,7 +25,9 @@
 
 use crate::family::Family;
 use crate::math::{sub, Vec3};
-use crate::par::{for_each_row, for_rows_mut, map_particles};
+use crate::par::{for_rows_mut, map_particles};
+
+use super::lanes::wide;
 
 /// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
 /// `L`.
@@ -51,6 +53,7 @@ fn rest_direction(fam: &Family, x: &[Vec3], i: usize, k: usize) -> Vec3 {
 
 /// Solves `a x = b` for a symmetric positive definite 6 x 6 `a` by Cholesky; `None` when a
 /// pivot is not positive.
+#[inline]
 fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
     for c in 0..6 {
         let mut d = a[c][c];
@@ -181,29 +184,34 @@ pub(crate) fn fit_tensors(
     let nb = fam.neighbours();
     let rl = fam.rest_lengths();
     map_particles(&mut out, |i| {
-        let scalar = [c[i], c[i], c[i], 0.0, 0.0, 0.0];
-        let mut a = [[0.0; 6]; 6];
-        for k in fam.range(i) {
-            let q = mandel(rest_direction(fam, x, i, k));
-            let s = omega(w, delta, rl, k) * rl[k] * vol[nb[k] as usize];
-            for p in 0..6 {
-                for t in 0..=p {
-                    a[p][t] += s * q[p] * q[t];
+        wide(
+            #[inline(always)]
+            || {
+                let scalar = [c[i], c[i], c[i], 0.0, 0.0, 0.0];
+                let mut a = [[0.0; 6]; 6];
+                for k in fam.range(i) {
+                    let q = mandel(rest_direction(fam, x, i, k));
+                    let s = omega(w, delta, rl, k) * rl[k] * vol[nb[k] as usize];
+                    for p in 0..6 {
+                        for t in 0..=p {
+                            a[p][t] += s * q[p] * q[t];
+                        }
+                    }
                 }
-            }
-        }
-        for p in 0..6 {
-            for t in 0..p {
-                a[t][p] = a[p][t];
-            }
-        }
-        let tau = ridge * (0..6).map(|p| a[p][p]).sum::<f64>() / 6.0;
-        let mut b = targets[material[i] as usize];
-        for p in 0..6 {
-            a[p][p] += tau;
-            b[p] += tau * scalar[p];
-        }
-        cholesky_solve(a, b).unwrap_or(scalar)
+                for p in 0..6 {
+                    for t in 0..p {
+                        a[t][p] = a[p][t];
+                    }
+                }
+                let tau = ridge * (0..6).map(|p| a[p][p]).sum::<f64>() / 6.0;
+                let mut b = targets[material[i] as usize];
+                for p in 0..6 {
+                    a[p][p] += tau;
+                    b[p] += tau * scalar[p];
+                }
+                cholesky_solve(a, b).unwrap_or(scalar)
+            },
+        )
     });
     out
 }
@@ -216,7 +224,9 @@ pub(crate) fn fit_tensors(
 /// blended towards the scalar calibration (`g = 1`): `g' = 1 + a (g - 1)` with the largest
 /// `a <= 1` that keeps every `|g'| <= bound` (its fit is then exact no more). The reverse's
 /// value is computed as its own row computes it: `q(n)` is even in `n`, the rest length
-/// symmetric, so both slots hold exactly the bits each end writes for itself.
+/// symmetric, so both slots hold exactly the bits each end writes for itself. Into
+/// `worst[i]`, the particle's `d_ij / (c_i omega_ij)` of largest magnitude (1 when none passes
+/// 1 in magnitude), for [`Correction`], in the same walk.
 // The family, its geometry and weights, the tensors, the scalars and the bound are each the
 // weights' own input.
 #[allow(clippy::too_many_arguments)]
@@ -230,6 +240,7 @@ pub(crate) fn dilatation_weights(
     bound: f64,
     own: &[f64],
     out: &mut [[f64; 2]],
+    worst: &mut [f64],
 ) {
     let rl = fam.rest_lengths();
     let nb = fam.neighbours();
@@ -244,41 +255,62 @@ pub(crate) fn dilatation_weights(
         out,
         &|first, blend: &mut [[f64; 2]], out| {
             let base = offsets[first] as usize;
-            for (i, b) in (first..).zip(blend.iter_mut()) {
-                let mut worst: f64 = 0.0;
-                for k in fam.range(i) {
-                    let j = nb[k] as usize;
-                    let q = mandel(rest_direction(fam, x, i, k));
-                    let g_ij = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
-                    let g_ji = (0..6).map(|p| q[p] * l[j][p]).sum::<f64>() / c[j];
-                    out[k - base] = [g_ij, g_ji];
-                    worst = worst.max((g_ij - 1.0).abs());
-                }
-                // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
-                let a = if worst > bound - 1.0 {
-                    (bound - 1.0) / worst
-                } else {
-                    1.0
-                };
-                *b = [a, c[i] / own[i]];
-            }
+            wide(
+                #[inline(always)]
+                || {
+                    for (i, b) in (first..).zip(blend.iter_mut()) {
+                        let mut worst: f64 = 0.0;
+                        for k in fam.range(i) {
+                            let j = nb[k] as usize;
+                            let q = mandel(rest_direction(fam, x, i, k));
+                            let g_ij = (0..6).map(|p| q[p] * l[i][p]).sum::<f64>() / c[i];
+                            let g_ji = (0..6).map(|p| q[p] * l[j][p]).sum::<f64>() / c[j];
+                            out[k - base] = [g_ij, g_ji];
+                            worst = worst.max((g_ij - 1.0).abs());
+                        }
+                        // |1 + a (g - 1)| <= 1 + a |g - 1| <= bound
+                        let a = if worst > bound - 1.0 {
+                            (bound - 1.0) / worst
+                        } else {
+                            1.0
+                        };
+                        *b = [a, c[i] / own[i]];
+                    }
+                },
+            )
         },
     );
-    // Then both ends' weights, each blended by its own particle's `a`.
+    // Then both ends' weights, each blended by its own particle's `a`, and the particle's
+    // weight of largest magnitude over its `omega`.
     let blend = &blend;
-    for_each_row(offsets, out, &|i, row: &mut [[f64; 2]]| {
-        for (k, slot) in fam.range(i).zip(row) {
-            let j = nb[k] as usize;
-            let (w_ij, w_ji) = match w {
-                None => (delta / rl[k], delta / rl[k]),
-                Some((w, rev)) => (w[k], w[rev[k] as usize]),
-            };
-            let ([g_ij, g_ji], bi, bj) = (*slot, blend[i], blend[j]);
-            *slot = [
-                w_ij * (1.0 + bi[0] * (g_ij - 1.0)) * bi[1],
-                w_ji * (1.0 + bj[0] * (g_ji - 1.0)) * bj[1],
-            ];
-        }
+    for_rows_mut(offsets, worst, out, &|first, worst: &mut [f64], out| {
+        let base = offsets[first] as usize;
+        wide(
+            #[inline(always)]
+            || {
+                for (i, most) in (first..).zip(worst.iter_mut()) {
+                    let mut m: f64 = 1.0;
+                    for k in fam.range(i) {
+                        let slot = &mut out[k - base];
+                        let j = nb[k] as usize;
+                        let (w_ij, w_ji) = match w {
+                            None => (delta / rl[k], delta / rl[k]),
+                            Some((w, rev)) => (w[k], w[rev[k] as usize]),
+                        };
+                        let ([g_ij, g_ji], bi, bj) = (*slot, blend[i], blend[j]);
+                        *slot = [
+                            w_ij * (1.0 + bi[0] * (g_ij - 1.0)) * bi[1],
+                            w_ji * (1.0 + bj[0] * (g_ji - 1.0)) * bj[1],
+                        ];
+                        let f = slot[0] / w_ij;
+                        if f.abs() > m.abs() {
+                            m = f;
+                        }
+                    }
+                    *most = m;
+                }
+            },
+        )
     });
 }
 
@@ -296,7 +328,8 @@ pub struct Spread {
 }
 
 impl Spread {
-    /// The spread of `v` (all 1 when empty).
+    /// The spread of `v` (all 1 when empty); order statistics by selection (linear time), not
+    /// by sorting.
     pub fn of(mut v: Vec<f64>) -> Spread {
         if v.is_empty() {
             return Spread {
@@ -306,13 +339,15 @@ impl Spread {
                 max: 1.0,
             };
         }
-        v.sort_by(f64::total_cmp);
-        let min = v[0];
-        let median = v[v.len() / 2];
-        let mut mag: Vec<f64> = v.iter().map(|x| x.abs()).collect();
-        mag.sort_by(f64::total_cmp);
-        let p99 = mag[(mag.len() - 1) * 99 / 100];
-        let max = mag[mag.len() - 1];
+        let min = v.iter().copied().min_by(f64::total_cmp).unwrap_or(1.0);
+        let half = v.len() / 2;
+        let median = *v.select_nth_unstable_by(half, f64::total_cmp).1;
+        for x in &mut v {
+            *x = x.abs();
+        }
+        let top = v.len() - 1;
+        let max = v.iter().copied().max_by(f64::total_cmp).unwrap_or(1.0);
+        let p99 = *v.select_nth_unstable_by(top * 99 / 100, f64::total_cmp).1;
         Spread {
             min,
             median,

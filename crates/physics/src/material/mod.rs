@@ -44,6 +44,16 @@ pub trait ForceModel: Send {
     /// (used by the stable-step estimate and diagnostics).
     fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]);
 
+    /// Whether the internal forces at `y` are known to vanish without evaluating them, and an
+    /// evaluation there would change no state that later results depend on: true only where
+    /// the model can tell exactly (its own rest positions, bit for bit, with nothing that
+    /// stresses it there). Lets the stable-step estimate and an integrator's start skip an
+    /// evaluation; the default claims nothing.
+    fn forces_vanish_at(&self, y: &[Vec3]) -> bool {
+        let _ = y;
+        false
+    }
+
     /// Elastic (stored) energy at `y` with the current history (J).
     fn elastic_energy(&mut self, y: &[Vec3]) -> f64;
 
@@ -104,6 +114,9 @@ impl<T: ForceModel + ?Sized> ForceModel for Box<T> {
     }
     fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
         (**self).trial_forces(y, forces)
+    }
+    fn forces_vanish_at(&self, y: &[Vec3]) -> bool {
+        (**self).forces_vanish_at(y)
     }
     fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
         (**self).elastic_energy(y)

@@ -242,8 +242,9 @@ impl Setup {
 
     /// [`Setup::with_limits`], recalling the material's stable-step estimate from `memo` (a
     /// [`crate::memo::MemoDir`], say) when a run before built the same model, and storing it
-    /// there otherwise: the recalled estimate is the iterated one bit for bit, after two force
-    /// evaluations in place of the whole iteration ([`SetupTimes::stable_step_recalled`]).
+    /// there otherwise: the recalled estimate is the iterated one bit for bit, after one force
+    /// evaluation in place of the whole iteration (two for a model that cannot vouch for its
+    /// forces at rest; [`SetupTimes::stable_step_recalled`]).
     pub fn with_memo(
         scene: &Scene,
         frames: Option<usize>,
