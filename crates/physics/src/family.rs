@@ -272,8 +272,8 @@ fn contains_near(row: &[u32], v: u32, guess: usize) -> bool {
 /// Particles a walk task takes in turn: one growing buffer for all their rows.
 const WALK_CHUNK: usize = 256;
 
-/// A walk task's reusable state: the tet last stamped by each walk, the walk's queue, and a
-/// bit per particle marking the current walk's finds.
+/// A walk task's reusable state: for each tet the walk that last stamped it, the walk's
+/// queue, and a bit per particle marking the current walk's finds.
 struct Walker {
     stamp: Vec<u32>,
     queue: Vec<u32>,
