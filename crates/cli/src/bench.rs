@@ -269,11 +269,13 @@ fn speed_report(c: &Common) -> Result<()> {
     let report = Report::start(c)?;
     let mut progress = report.progress();
     let e = effort(c);
+    // first, while the heap is fresh: its runs' peak memory would otherwise count what the
+    // allocator kept of the other cases' arrays
+    let (side, skipped, floor) = speed::lammps_side_by_side(e, &mut progress)?;
     let paths = speed::paths(e, &mut progress)?;
     let wall = speed::glass_wall(e, &mut progress)?;
     let share = speed::fracture_share(e, &mut progress)?;
     let implicit = speed::implicit_step(e, &mut progress)?;
-    let (side, skipped, floor) = speed::lammps_side_by_side(e, &mut progress)?;
     let mut md = report.header("speed");
     md.push_str("## Bond-update rate per material path\n\n");
     md.push_str(&paths.to_markdown());

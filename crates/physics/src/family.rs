@@ -2,7 +2,7 @@
 //! horizon ball, symmetrised, stored as CSR bonds.
 
 use crate::error::PhysicsError;
-use crate::math::{norm, norm_squared, sub, Vec3};
+use crate::math::{norm_squared, sub, Vec3};
 use crate::par::for_each_row;
 use rayon::prelude::*;
 
@@ -43,29 +43,16 @@ impl Family {
         horizon: f64,
     ) -> Result<(Family, FamilyReport), PhysicsError> {
         let n = positions.len();
-        let (walk_off, walk_nb) = walk_all(positions, adjacency, horizon)?;
+        let (walk_off, walk_nb, (below, above, hash)) = walk_all(positions, adjacency, horizon)?;
         let row = |i: usize| &walk_nb[walk_off[i] as usize..walk_off[i + 1] as usize];
         // Each pair found by both walks is named twice, once from each end; one found by a
         // single walk, once. So the rows name as many pairs below their own index as above
         // when the walks agree, and a hash of each pair (ends in order) cancels out of the
         // rows' exclusive-or: both hold unless the walks differ, for a set of pairs whose
-        // hashes happen to cancel (one chance in 2^64 for a hash spread as the one below,
-        // and never for a single pair, which the counts catch). They are read in one pass over
-        // the rows in order; otherwise every pair is searched for from its other end.
-        let (below, above, hash) = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                row(i).iter().fold((0usize, 0usize, 0u64), |(b, a, h), &j| {
-                    let low = (j as usize) < i;
-                    let (lo, hi) = if low { (j, i as u32) } else { (i as u32, j) };
-                    (
-                        b + usize::from(low),
-                        a + usize::from(!low),
-                        h ^ pair_hash(lo, hi),
-                    )
-                })
-            })
-            .reduce(|| (0, 0, 0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 ^ b.2));
+        // hashes happen to cancel (one chance in 2^64 for a hash spread as `pair_hash`'s, and
+        // never for a single pair, which the counts catch). Each walk reads both off its row
+        // while the row is at hand ([`row_check`]); only when they fail is every pair searched
+        // for from its other end.
         // Symmetrise: a pair found by one walk only is added to the other row.
         let mut extra: Vec<(u32, u32)> = if below == above && hash == 0 {
             Vec::new()
@@ -127,9 +114,7 @@ impl Family {
         let (offs, nbs) = (offsets.as_slice(), neighbours.as_slice());
         for_each_row(offs, &mut rest_lengths, &|i, rl: &mut [f64]| {
             let row = &nbs[offs[i] as usize..offs[i + 1] as usize];
-            for (r, &j) in rl.iter_mut().zip(row) {
-                *r = norm(sub(positions[j as usize], positions[i]));
-            }
+            crate::material::lanes::lengths(positions, i, row, rl);
         });
         let counts = offsets.windows(2).map(|w| (w[1] - w[0]) as usize);
         let isolated: Vec<u32> = counts
@@ -269,6 +254,28 @@ fn contains_near(row: &[u32], v: u32, guess: usize) -> bool {
     row[lo..hi].binary_search(&v).is_ok()
 }
 
+/// What the symmetry check reads off the rows: pairs named below their row's own index, pairs
+/// named above it, and the exclusive-or of every named pair's [`pair_hash`] (ends in order).
+type Check = (usize, usize, u64);
+
+/// [`Check`] of row `i`.
+fn row_check(i: usize, row: &[u32]) -> Check {
+    row.iter().fold((0, 0, 0), |(b, a, h), &j| {
+        let low = (j as usize) < i;
+        let (lo, hi) = if low { (j, i as u32) } else { (i as u32, j) };
+        (
+            b + usize::from(low),
+            a + usize::from(!low),
+            h ^ pair_hash(lo, hi),
+        )
+    })
+}
+
+/// Two [`Check`]s together.
+fn merge(a: Check, b: Check) -> Check {
+    (a.0 + b.0, a.1 + b.1, a.2 ^ b.2)
+}
+
 /// Particles a walk task takes in turn: one growing buffer for all their rows.
 const WALK_CHUNK: usize = 256;
 
@@ -278,6 +285,8 @@ struct Walker {
     stamp: Vec<u32>,
     queue: Vec<u32>,
     bits: Vec<u64>,
+    /// Particles the task's last chunk found.
+    last: usize,
 }
 
 impl Walker {
@@ -286,6 +295,7 @@ impl Walker {
             stamp: vec![u32::MAX; n],
             queue: Vec::new(),
             bits: vec![0; n.div_ceil(64)],
+            last: 0,
         }
     }
 
@@ -302,7 +312,9 @@ impl Walker {
         h2: f64,
         found: &mut Vec<u32>,
     ) {
-        let Walker { stamp, queue, bits } = self;
+        let Walker {
+            stamp, queue, bits, ..
+        } = self;
         let xi = positions[i];
         let start = found.len();
         let (mut lo, mut hi) = (usize::MAX, 0);
@@ -352,7 +364,8 @@ impl Walker {
     }
 }
 
-/// One breadth-first walk per particle, each row sorted, as CSR (row offsets, neighbours):
+/// One breadth-first walk per particle, each row sorted, as CSR (row offsets, neighbours),
+/// with the rows' [`Check`]:
 /// each task walks [`WALK_CHUNK`] particles into one buffer, so the rows are neither allocated
 /// one by one nor left scattered over the heap when they are freed; the buffers are then
 /// copied into place in parallel.
@@ -360,31 +373,38 @@ fn walk_all(
     positions: &[Vec3],
     adjacency: &[[u32; 4]],
     horizon: f64,
-) -> Result<(Vec<u32>, Vec<u32>), PhysicsError> {
+) -> Result<(Vec<u32>, Vec<u32>, Check), PhysicsError> {
     let n = positions.len();
     let h2 = horizon * horizon;
-    let chunks: Vec<(Vec<u32>, Vec<u32>)> = (0..n.div_ceil(WALK_CHUNK))
+    let chunks: Vec<(Vec<u32>, Vec<u32>, Check)> = (0..n.div_ceil(WALK_CHUNK))
         .into_par_iter()
         .map_init(
             || Walker::new(n),
             |walker, c| {
-                let (mut lens, mut found) = (Vec::with_capacity(WALK_CHUNK), Vec::new());
+                // room for a chunk as full as this task's last (grown by doubling past it)
+                let room = walker.last + walker.last / 8;
+                let (mut lens, mut found) =
+                    (Vec::with_capacity(WALK_CHUNK), Vec::with_capacity(room));
+                let mut check = (0, 0, 0);
                 for i in c * WALK_CHUNK..n.min((c + 1) * WALK_CHUNK) {
                     let start = found.len();
                     walker.walk(i, positions, adjacency, h2, &mut found);
                     lens.push((found.len() - start) as u32);
+                    check = merge(check, row_check(i, &found[start..]));
                 }
-                (lens, found)
+                walker.last = found.len();
+                (lens, found, check)
             },
         )
         .collect();
-    let total: usize = chunks.iter().map(|(_, f)| f.len()).sum();
+    let check = chunks.iter().fold((0, 0, 0), |a, (_, _, b)| merge(a, *b));
+    let total: usize = chunks.iter().map(|(_, f, _)| f.len()).sum();
     if total > u32::MAX as usize {
         return Err(PhysicsError::TooManyBonds(total));
     }
     let mut offsets = Vec::with_capacity(n + 1);
     offsets.push(0u32);
-    for (lens, _) in &chunks {
+    for (lens, _, _) in &chunks {
         for len in lens {
             offsets.push(offsets[offsets.len() - 1] + len);
         }
@@ -392,7 +412,7 @@ fn walk_all(
     let mut neighbours = vec![0u32; total];
     let mut rest = neighbours.as_mut_slice();
     let mut slices = Vec::with_capacity(chunks.len());
-    for (_, found) in &chunks {
+    for (_, found, _) in &chunks {
         let (head, tail) = rest.split_at_mut(found.len());
         slices.push(head);
         rest = tail;
@@ -400,6 +420,6 @@ fn walk_all(
     slices
         .into_par_iter()
         .zip(&chunks)
-        .for_each(|(out, (_, found))| out.copy_from_slice(found));
-    Ok((offsets, neighbours))
+        .for_each(|(out, (_, found, _))| out.copy_from_slice(found));
+    Ok((offsets, neighbours, check))
 }

@@ -5,7 +5,7 @@ pub mod chen;
 mod fit;
 mod guard;
 pub(crate) mod kernel;
-mod lanes;
+pub(crate) mod lanes;
 pub mod params;
 pub mod xu;
 pub(crate) mod xu_kernel;
