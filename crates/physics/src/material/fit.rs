@@ -483,7 +483,7 @@ mod tests {
     /// The setup's four-bond vectors ([`lanes::lengths`], [`lanes::fit_factors`],
     /// [`lanes::fit_weights`]) against the one-bond formulas, bit for bit, on every bond they
     /// take: a 4 x 4 x 3-cell Kuhn block (rows of 37 to 142 bonds, every count of tail bonds
-    /// after the last four occurring) with its barycentres jittered by up to 3e-4 of a cell, so
+    /// after the last four occurring) with its barycentres jittered by up to 1.5e-4 of a cell, so
     /// that no two bonds share a length or a direction, and tensors, constants and blends that
     /// differ from particle to particle (some factors negative). Off AVX2 the vectors take no
     /// bond and there is nothing to compare.

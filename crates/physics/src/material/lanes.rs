@@ -584,7 +584,7 @@ unsafe fn fit_factors_avx2(
     let root2 = _mm256_set1_pd(std::f64::consts::SQRT_2);
     let mut worst = _mm256_setzero_pd();
     let mut o = 0;
-    while o + 4 <= nb.len() {
+    while o + 4 <= nb.len().min(row.len()) {
         let j = [0, 1, 2, 3].map(|b| nb[o + b] as usize);
         let r = _mm256_loadu_pd(rl[o..o + 4].as_ptr());
         // (X_j - X_i) / r, as `fit::rest_direction`
@@ -643,6 +643,9 @@ fn store_pairs(out: &mut [[f64; 2]], ij: __m256d, ji: __m256d) {
 
 /// The Mandel vectors `l[j_b]` of four particles, transposed: component `p` of every lane in
 /// vector `p`.
+///
+/// # Safety
+/// The CPU must have AVX2 ([`available`]).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -709,10 +712,10 @@ unsafe fn lengths_avx2(x: &[Vec3], i: usize, nb: &[u32], row: &mut [f64]) -> usi
 /// The fitted dilatation's weights of particle `i`'s bonds without per-bond deviatoric
 /// weights ([`super::fit`]'s second pass), four bonds a vector: each slot of `row` holds the
 /// factors `[g_ij, g_ji]` and gets `[w (1 + a_i (g_ij - 1)) s_i, w (1 + a_j (g_ji - 1)) s_j]`
-/// with `w = delta / r` and `blend[p] = [a_p, s_p]`; `m` becomes the first of the weights
-/// over `w` of greatest magnitude not under its own (starting from the caller's). Returns how
-/// many bonds it took (a multiple of four; none where the CPU lacks AVX2) and `m`. The same
-/// bits as the scalar loop, whose order the maximum's ties keep.
+/// with `w = delta / r` and `blend[p] = [a_p, s_p]`. Starting from the caller's `m`, each
+/// bond in turn whose `d_ij / w` is strictly greater in magnitude than `m` replaces it, so a
+/// tie keeps the earlier bond, as the scalar loop does. Returns how many bonds it took (a
+/// multiple of four; none where the CPU lacks AVX2) and `m`, with the scalar loop's bits.
 pub(crate) fn fit_weights(
     family: &Family,
     delta: f64,
