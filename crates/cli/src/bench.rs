@@ -197,10 +197,13 @@ fn shells_report(c: &Common) -> Result<()> {
     let report = Report::start(c)?;
     let mut progress = report.progress();
     let e = effort(c);
-    let (egg, text) = perifrac_bench::shells::egg_drop(e, &mut progress)?;
-    let (newmark, newmark_text) = perifrac_bench::shells::egg_newmark(e, &mut progress)?;
+    // The runs step on a worker of the pool, as `perifrac run` does (run.rs, `run_on_pool`);
+    // the speed case installs its own pools.
+    let (egg, text) = rayon::scope(|_| perifrac_bench::shells::egg_drop(e, &mut progress))?;
+    let (newmark, newmark_text) =
+        rayon::scope(|_| perifrac_bench::shells::egg_newmark(e, &mut progress))?;
     let speed = perifrac_bench::shells::speed(e, &mut progress)?;
-    let bulb = perifrac_bench::shells::bulb(e, &mut progress)?;
+    let bulb = rayon::scope(|_| perifrac_bench::shells::bulb(e, &mut progress))?;
     let mut md = report.header("shells");
     md.push_str(
         "The shell model's accuracy (plates against Kirchhoff, a stretched sheet against \

@@ -96,6 +96,15 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if args.frames == Some(0) {
         anyhow::bail!("--frames must be at least 1");
     }
+    // The whole run steps on a worker of the pool: a parallel loop started from outside the
+    // pool hands its work to a worker and waits to be woken, even when the loop is too short
+    // to split; at a shell's 1,280 triangles that hand-off took half the run on one thread
+    // (docs/DECISIONS.md, "Runs step on a worker of the pool").
+    rayon::scope(|_| run_on_pool(args, threads))
+}
+
+/// [`run`] once the worker threads are set up, on a worker of the pool.
+fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
     let started = Instant::now();
     // what to run: a fresh scene into an empty directory, or the checkpoint in one
     let (dir, scene, frames, checkpoint) = match &args.resume {
