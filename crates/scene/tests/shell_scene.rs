@@ -346,6 +346,21 @@ fn newmark_keys_are_checked_by_key() {
     }
 }
 
+/// The scene `text` after `steps` steps of 5 us: positions (m), velocities (m/s) and the
+/// number of triangles broken.
+fn stepped(text: &str, steps: usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, usize) {
+    let mut setup = ShellSetup::new(&parse(text).unwrap(), None, false).unwrap();
+    for _ in 0..steps {
+        setup.shell.advance(5e-6).unwrap();
+    }
+    let s = setup.shell.shell();
+    (
+        s.positions().to_vec(),
+        s.velocities().to_vec(),
+        setup.shell.stats().events.len(),
+    )
+}
+
 #[test]
 fn newmark_results_are_the_same_for_any_thread_count() {
     // The 1,280-triangle egg (its passes split into several tasks) through its landing:
@@ -359,18 +374,7 @@ fn newmark_results_are_the_same_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .unwrap();
-        pool.install(|| {
-            let mut setup = ShellSetup::new(&parse(&text).unwrap(), None, false).unwrap();
-            for _ in 0..20 {
-                setup.shell.advance(5e-6).unwrap();
-            }
-            let s = setup.shell.shell();
-            (
-                s.positions().to_vec(),
-                s.velocities().to_vec(),
-                setup.shell.stats().events.len(),
-            )
-        })
+        pool.install(|| stepped(&text, 20))
     };
     let one = run(1);
     assert!(one.2 > 0, "the egg cracks in these steps");
@@ -384,18 +388,7 @@ fn explicit_results_are_the_same_on_and_off_the_pool() {
     // its own thread, whose parallel loops the pool then runs. The 1,280-triangle egg through
     // its landing with the search, cracking: the same bits either way, and for 1 and 2 threads.
     let text = EGG.replace("subdivisions = 2", "subdivisions = 3");
-    let run = || {
-        let mut setup = ShellSetup::new(&parse(&text).unwrap(), None, false).unwrap();
-        for _ in 0..40 {
-            setup.shell.advance(5e-6).unwrap();
-        }
-        let s = setup.shell.shell();
-        (
-            s.positions().to_vec(),
-            s.velocities().to_vec(),
-            setup.shell.stats().events.len(),
-        )
-    };
+    let run = || stepped(&text, 40);
     let here = run();
     assert!(here.2 > 0, "the egg cracks in these steps");
     assert_eq!(here, rayon::scope(|_| run()));
