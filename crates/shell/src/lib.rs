@@ -40,7 +40,7 @@ pub use error::ShellError;
 pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;
 pub use mesh::{Edge, Role, ShellMesh, NONE};
-pub use model::{dihedral, phi, FaceStrain, ShellModel};
+pub use model::{dihedral, dihedral_half_tan, phi, phi_of_half_tan, FaceStrain, ShellModel};
 pub use output::{enclosed_volume, pieces, FrameMesh};
 pub use perifrac_physics::Vec3;
 pub use plastic::ShellYield;
