@@ -142,12 +142,13 @@ impl RestData {
             if e.is_boundary() {
                 continue;
             }
-            let (t, _) = dihedral(
+            let (sin, cos, _) = dihedral_terms(
                 x[e.v[0] as usize],
                 x[e.v[1] as usize],
                 x[e.opposite[0] as usize],
                 x[e.opposite[1] as usize],
             );
+            let t = sin.atan2(cos);
             if std::f64::consts::PI - t.abs() < FOLD_MARGIN {
                 return Err(ShellError::Folded {
                     a: e.v[0],
@@ -157,13 +158,7 @@ impl RestData {
             }
             theta[k] = t;
             // As the force pass forms it, so a shell at rest has exactly zero bending strain.
-            let (half, _) = dihedral_half_tan(
-                x[e.v[0] as usize],
-                x[e.v[1] as usize],
-                x[e.opposite[0] as usize],
-                x[e.opposite[1] as usize],
-            );
-            phis[k] = phi_of_half_tan(half).0;
+            phis[k] = phi_of_half_tan(half_tan(sin, cos)).0;
         }
         let areal = material.areal_density();
         let mut masses = vec![0.0; x.len()];
@@ -239,8 +234,15 @@ const FOLDED_HALF_TAN: f64 = 1.6e16;
 /// bulb scene's stepping.
 pub fn dihedral_half_tan(a: Vec3, b: Vec3, c0: Vec3, c1: Vec3) -> (f64, [Vec3; 4]) {
     let (sin, cos, grad) = dihedral_terms(a, b, c0, c1);
+    (half_tan(sin, cos), grad)
+}
+
+/// `tan(theta / 2)` from the angle's sine and cosine terms of [`dihedral_terms`], each scaled
+/// alike (see [`dihedral_half_tan`]).
+#[inline]
+fn half_tan(sin: f64, cos: f64) -> f64 {
     let r = (sin * sin + cos * cos).sqrt();
-    let t = if cos >= 0.0 {
+    if cos >= 0.0 {
         if r > 0.0 {
             sin / (r + cos)
         } else {
@@ -250,8 +252,7 @@ pub fn dihedral_half_tan(a: Vec3, b: Vec3, c0: Vec3, c1: Vec3) -> (f64, [Vec3; 4
         (r - cos) / sin
     } else {
         FOLDED_HALF_TAN.copysign(sin)
-    };
-    (t, grad)
+    }
 }
 
 /// The signed dihedral angle (rad) at edge `a -> b` between the triangle `(a, b, c0)` and the
