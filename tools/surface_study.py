@@ -1,0 +1,333 @@
+"""Issue 18's surface study: Chen's model linearised about the rest state, solved statically
+on the accuracy benchmark's bars, with and without ghost particles mirrored across the bar's
+side faces. Independent of perifrac's physics crate (it only calls `perifrac mesh`).
+
+    python3 tools/surface_study.py cantilever --mesh unstructured --cells 4 [--ghosts]
+    python3 tools/surface_study.py moduli --mesh unstructured --nu 0.3 [--ghosts]
+    python3 tools/surface_study.py interior --mesh kuhn
+
+`cantilever`: the 1 x 0.1 x 0.1 m bar of `perifrac bench accuracy --case cantilever` (10 n
+cells along, n across, a clamp layer of ceil(1.5 x 1.2827) cells behind x = 0 held, gravity
+on rho = 1000 kg/m^3, E = 1e8 Pa, nu = 0.3, k = 1.5); prints the tip's deflection (a line
+fitted over the last two cells, at x = 1) against the P2 answer 0.014728 m, and its sideways
+deflection over its vertical one.
+
+`moduli`: the 0.4 x 0.1 x 0.1 m bar of `--case moduli` (32 x 8 x 8 cells, end layers as deep
+as the clamp held, one pulled by 0.1%); prints E (the pulled layer's reaction over the
+section, over the axial strain fitted over the middle third) and nu (the lateral strains
+fitted there).
+
+`interior`: the moduli bar's particles more than a horizon from every face under an affine
+uniaxial stress: their energy over the continuum's (whole families, no surface).
+
+The model is MODEL.md section 2 with perifrac's default correction: each particle's dilatation
+read through fitted weights `omega (n n : L_i)` with `sum_j omega (n n : L_i) r n n V_j = I`,
+and its deviatoric constant `b_i = 15 mu / (2 sum_j omega r^2 V_j)`; the energy
+`sum_i V_i (kappa theta_i^2 / 2 + b_i sum_j omega ed_ij^2 V_j)` with `ed = e - theta r / 3`
+and `e = n . (u_j - u_i)`. Families are horizon balls (on a convex box, where the face walk of
+MODEL.md finds nearly the same). Linear: the benchmarks' loads strain the bars by under 0.3%.
+
+`--ghosts`: every particle within a horizon of a side face (y or z) is mirrored across it
+(and across both faces at an edge); a ghost joins the families it falls in, carries no energy
+of its own, and moves with its source `p` as `u_p + F_p (X_g - X_p)`, `F_p` the least-squares
+gradient over `p`'s real family (exact for every affine field, rotations included). The fit
+and `b_i` then run over the completed families. `--implicit`: `F_p` over `p`'s whole family,
+ghosts included, so the ghosts' displacements solve a linear system together (a constrained
+solve here).
+
+`--order 2`: the ghosts extrapolated by a quadratic least-squares fit over the source's real
+family in place of the affine one.
+
+Needs numpy, scipy and meshio; pypardiso, if installed, solves in a fraction of the time and
+memory (the 60 x 6 x 6 bar with ghosts does not fit in 24 GiB without it). Cost here, with
+pypardiso: seconds for the 20 x 2 x 2 cantilever, about a minute at 40 x 4 x 4; the moduli bar
+with ghosts 5 minutes and 18 GB (one run at a time).
+"""
+
+import argparse
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import meshio
+import numpy as np
+import scipy.sparse as sp
+from scipy.spatial import cKDTree
+
+try:
+    import pypardiso
+
+    def solve(a, b):
+        return pypardiso.spsolve(a.tocsr(), b)
+
+except ImportError:
+    import scipy.sparse.linalg as spl
+
+    def solve(a, b):
+        return spl.spsolve(a.tocsc(), b)
+
+
+E0 = 1e8
+RHO, GRAVITY = 1000.0, 9.81
+K_HORIZON = 1.5
+KUHN_EDGE_PER_CELL = (3 + 3 * math.sqrt(2) + math.sqrt(3)) / 7
+P2_TIP = 0.014728  # m, BENCHMARKS.md: the project's P2 tets converged
+
+
+def mesh_box(perifrac, length, cells, unstructured, out):
+    args = [perifrac, "mesh", f"box:{length}x0.1x0.1", "--cells", ",".join(map(str, cells)),
+            "-o", out]
+    if unstructured:
+        args.append("--unstructured")
+    subprocess.run(args, check=True, capture_output=True)
+    m = meshio.read(out)
+    x, t = m.points, m.cells_dict["tetra"]
+    p = x[t]
+    a, b, c = p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], p[:, 3] - p[:, 0]
+    vol = np.abs(np.einsum("ij,ij->i", a, np.cross(b, c))) / 6
+    edges = np.unique(np.sort(t[:, [[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]]].reshape(-1, 2),
+                              axis=1), axis=0)
+    lam = np.linalg.norm(x[edges[:, 0]] - x[edges[:, 1]], axis=1).mean()
+    return x, p.mean(axis=1), vol, lam
+
+
+def basis(d, order):
+    """The least-squares fit's terms of an offset `d`: linear, or linear and quadratic."""
+    if order == 1:
+        return d
+    x, y, z = d.T
+    return np.stack([x, y, z, x * x / 2, y * y / 2, z * z / 2, x * y, x * z, y * z], 1)
+
+
+class Model:
+    """Bonds of the real particles (ghosts appended after them) and their constants."""
+
+    def __init__(self, bary, vol, lam, nu, lo, hi, ghosts):
+        n = len(bary)
+        delta = K_HORIZON * lam
+        pts, vols, src = [bary], [vol], [np.arange(n)]
+        if ghosts:
+            for ay in (None, 0, 1):
+                for az in (None, 0, 1):
+                    if ay is None and az is None:
+                        continue
+                    g = bary.copy()
+                    near = np.ones(n, bool)
+                    for axis, side in ((1, ay), (2, az)):
+                        if side is None:
+                            continue
+                        plane = (lo, hi)[side][axis]
+                        g[:, axis] = 2 * plane - g[:, axis]
+                        near &= np.abs(bary[:, axis] - plane) < delta
+                    pts.append(g[near])
+                    vols.append(vol[near])
+                    src.append(np.flatnonzero(near))
+        self.n, self.bary, self.vol = n, bary, vol
+        self.pos, self.src = np.vstack(pts), np.concatenate(src)
+        allvol = np.concatenate(vols)
+        found = cKDTree(self.pos).query_ball_point(bary, delta, return_sorted=True)
+        i = np.repeat(np.arange(n), [len(f) for f in found])
+        j = np.concatenate([np.asarray(f, int) for f in found])
+        keep = i != j
+        self.i, self.j = i[keep], j[keep]
+        xi = self.pos[self.j] - bary[self.i]
+        self.xi, self.r = xi, np.linalg.norm(xi, axis=1)
+        self.nv = xi / self.r[:, None]
+        self.wv = delta / self.r * allvol[self.j]  # omega V_j
+        mu, self.kappa = E0 / (2 * (1 + nu)), E0 / (3 * (1 - 2 * nu))
+        self.b = 15 * mu / (2 * np.bincount(self.i, self.wv * self.r ** 2, n))
+        nx, ny, nz = self.nv.T
+        p = np.stack([nx * nx, ny * ny, nz * nz, 2 * nx * ny, 2 * nx * nz, 2 * ny * nz], 1)
+        q = p * [1, 1, 1, 0.5, 0.5, 0.5]
+        a = np.zeros((n, 6, 6))
+        np.add.at(a, self.i, (self.wv * self.r)[:, None, None] * q[:, :, None] * p[:, None, :])
+        l = np.linalg.solve(a, np.tile([1.0, 1, 1, 0, 0, 0], (n, 1))[..., None])[..., 0]
+        self.dv = self.wv * np.einsum("ij,ij->i", p, l[self.i])  # fitted weight times V_j
+        # The correction's factors on MODEL.md's constants, as `perifrac run` prints them: per
+        # particle, the dilatation weight of largest magnitude and b_i.
+        dil = np.zeros(n)
+        np.maximum.at(dil, self.i, np.abs(self.dv / self.wv))
+        self.factors = (dil / (9 / (4 * math.pi * delta ** 4)),
+                        self.b / (15 * mu / (2 * math.pi * delta ** 5)))
+
+    def ghost_rows(self, whole, order=1):
+        """(3 m x 3 N): each ghost's displacement `u_p + F_p (X_g - X_p)` from every particle's,
+        `F_p` the least-squares gradient over `p`'s real family or, when `whole`, over its whole
+        family (ghosts included)."""
+        n, na = self.n, len(self.pos)
+        use = np.ones(len(self.i), bool) if whole else self.j < n
+        ir, jr, xr, wr = self.i[use], self.j[use], self.xi[use], self.wv[use]
+        phi = basis(xr, order)
+        size = phi.shape[1]
+        shape = np.zeros((n, size, size))
+        np.add.at(shape, ir, wr[:, None, None] * phi[:, :, None] * phi[:, None, :])
+        inv = np.linalg.inv(shape)
+        start = np.searchsorted(ir, np.arange(n))
+        end = np.searchsorted(ir, np.arange(n), "right")
+        g = np.arange(na - n)
+        p = self.src[n:]
+        k = np.einsum("gab,gb->ga", inv[p], basis(self.pos[n:] - self.bary[p], order))
+        gi = np.repeat(g, end[p] - start[p])
+        bi = np.concatenate([np.arange(s, e) for s, e in zip(start[p], end[p])] + [[]]).astype(int)
+        c = wr[bi] * np.einsum("ia,ia->i", phi[bi], k[gi])
+        rest = 1 - np.bincount(gi, c, len(g))
+        rows, cols, vals = [], [], []
+        for ax in range(3):
+            rows += [3 * gi + ax, 3 * g + ax]
+            cols += [3 * jr[bi] + ax, 3 * p + ax]
+            vals += [c, rest]
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                             shape=(3 * len(g), 3 * na))
+
+    def hessian(self):
+        """The energy's Hessian over every particle's displacement, ghosts as free points."""
+        n, na, nb = self.n, len(self.pos), len(self.i)
+        b = np.arange(nb)
+        cols = np.stack([3 * self.j + a for a in range(3)] + [3 * self.i + a for a in range(3)], 1)
+        ext = sp.csr_matrix((np.concatenate([self.nv, -self.nv], 1).ravel(),
+                             (np.repeat(b, 6), cols.ravel())), shape=(nb, 3 * na))
+        vb = self.vol * self.b
+        theta = sp.csr_matrix((self.dv, (self.i, b)), shape=(n, nb)) @ ext
+        mean = sp.csr_matrix((self.wv * self.r / 3, (self.i, b)), shape=(n, nb)) @ ext
+        m = np.bincount(self.i, self.wv * self.r ** 2 / 9, n)
+        k = ext.T @ sp.diags(2 * vb[self.i] * self.wv) @ ext
+        k = k + theta.T @ sp.diags(self.kappa * self.vol + 2 * vb * m) @ theta
+        cross = theta.T @ sp.diags(2 * vb) @ mean
+        return (k - cross - cross.T).tocsr()
+
+    def static(self, held, u, f, implicit, order=1):
+        """Minimises the energy less `f . u` over the real displacements not `held` (a mask of
+        real dofs; `u` gives the held ones). Returns the real displacements and the reaction
+        (the energy's gradient less `f`) on every real dof."""
+        n3 = 3 * self.n
+        k = self.hessian()
+        if not implicit:
+            g = sp.vstack([sp.identity(n3, format="csr"), self.ghost_rows(False, order)[:, :n3]]).tocsr()
+            k = (g.T @ k @ g).tocsr()
+            u = u.copy()
+            free = ~held
+            u[free] = solve(k[free][:, free], f[free] - k[free][:, held] @ u[held])
+            return u, k @ u - f
+        # Ghosts read their sources' whole families: the ghosts' displacements are unknowns
+        # tied by `b u_all = 0`, solved with Lagrange multipliers.
+        c = self.ghost_rows(True, order)
+        ng = c.shape[0]
+        b = (sp.hstack([sp.csr_matrix((ng, n3)), sp.identity(ng)]) - c).tocsr()
+        free = np.concatenate([~held, np.ones(ng, bool)])
+        hold = np.concatenate([held, np.zeros(ng, bool)])
+        ua = np.concatenate([u, np.zeros(ng)])
+        fa = np.concatenate([f, np.zeros(ng)])
+        kkt = sp.bmat([[k[free][:, free], b[:, free].T], [b[:, free], None]]).tocsr()
+        rhs = np.concatenate([fa[free] - k[free][:, hold] @ ua[hold], -(b[:, hold] @ ua[hold])])
+        x = solve(kkt, rhs)
+        ua[free] = x[: free.sum()]
+        grad = k @ ua + b.T @ x[free.sum():] - fa
+        return ua[:n3], grad[:n3]
+
+
+def spread(model):
+    """Prints the median, 99th percentile and largest of the correction's two factors."""
+    for name, f in zip(("dilatation", "b"), model.factors):
+        print(f"  {name} factor: median {np.median(f):.2f}, 99% {np.percentile(f, 99):.2f}, "
+              f"max {f.max():.2f}")
+
+
+def cantilever(perifrac, n, unstructured, ghosts, implicit, order, tmp):
+    nx = 10 * n
+    h = 1.0 / nx
+    clamp = math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)
+    x, bary, vol, lam = mesh_box(perifrac, 1 + clamp * h, [nx + clamp, n, n], unstructured,
+                                 os.path.join(tmp, "bar.mesh"))
+    shift = np.array([clamp * h, 0.05, 0.05])
+    x, bary = x - shift, bary - shift
+    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), ghosts)
+    spread(model)
+    f = np.zeros((len(vol), 3))
+    f[:, 2] = -RHO * GRAVITY * vol
+    u, _ = model.static(np.repeat(bary[:, 0] < 0, 3), np.zeros(3 * len(vol)), f.ravel(),
+                        implicit, order)
+    u = u.reshape(-1, 3)
+    tip = bary[:, 0] > 1 - 2 * h
+    at_end = [np.polyval(np.polyfit(bary[tip, 0], u[tip, a], 1), 1.0) for a in (1, 2)]
+    return -at_end[1] / P2_TIP - 1, abs(at_end[0]) / -at_end[1]
+
+
+def moduli(perifrac, nu, unstructured, ghosts, implicit, order, tmp):
+    n, nx, length = 8, 32, 0.4
+    h = length / nx
+    layer = math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)
+    x, bary, vol, lam = mesh_box(perifrac, length + 2 * layer * h, [nx + 2 * layer, n, n],
+                                 unstructured, os.path.join(tmp, "bar.mesh"))
+    shift = np.array([layer * h, 0.05, 0.05])
+    x, bary = x - shift, bary - shift
+    model = Model(bary, vol, lam, nu, x.min(0), x.max(0), ghosts)
+    pulled = bary[:, 0] > length
+    held = np.repeat((bary[:, 0] < 0) | pulled, 3)
+    strain = 1e-3
+    u = np.zeros((len(vol), 3))
+    u[pulled, 0] = strain * length
+    u, grad = model.static(held, u.ravel(), np.zeros(3 * len(vol)), implicit, order)
+    reaction = grad.reshape(-1, 3)[pulled, 0].sum()
+    u = u.reshape(-1, 3)
+    mid = (bary[:, 0] > length / 3) & (bary[:, 0] < 2 * length / 3)
+    slope = [np.polyfit(bary[mid, a], u[mid, a], 1)[0] for a in range(3)]
+    return reaction / 0.01 / slope[0] / E0 - 1, -(slope[1] + slope[2]) / 2 / slope[0]
+
+
+def interior(perifrac, unstructured, tmp):
+    """Energy over the continuum's under an affine uniaxial stress (nu = 0.3), over the moduli
+    bar's particles more than a horizon from every face: whole families, no surface."""
+    x, bary, vol, lam = mesh_box(perifrac, 0.4, [32, 8, 8], unstructured,
+                                 os.path.join(tmp, "bar.mesh"))
+    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), False)
+    delta = K_HORIZON * lam
+    lo, hi = x.min(0), x.max(0)
+    inner = np.all((bary - lo > delta) & (hi - bary > delta), axis=1)
+    u = (bary - (lo + hi) / 2) @ np.diag([1.0, -0.3, -0.3]) * 1e-3
+    e = np.einsum("ij,ij->i", model.nv, u[model.j] - u[model.i])
+    theta = np.bincount(model.i, model.dv * e, model.n)
+    ed = e - theta[model.i] * model.r / 3
+    w = model.kappa * theta ** 2 / 2 + model.b * np.bincount(model.i, model.wv * ed ** 2, model.n)
+    return (vol * w)[inner].sum() / (vol[inner].sum() * E0 * 1e-6 / 2), inner.sum()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("case", choices=["cantilever", "moduli", "interior"])
+    ap.add_argument("--mesh", choices=["kuhn", "unstructured"], default="unstructured")
+    ap.add_argument("--cells", type=int, nargs="+", default=[4], help="cells across (cantilever)")
+    ap.add_argument("--nu", type=float, nargs="+", default=[0.3], help="Poisson's ratios (moduli)")
+    ap.add_argument("--ghosts", action="store_true", help="mirror ghosts across the side faces")
+    ap.add_argument("--implicit", action="store_true",
+                    help="ghosts' gradients over their sources' whole families (implies --ghosts)")
+    ap.add_argument("--order", type=int, choices=[1, 2], default=1,
+                    help="ghosts extrapolated by an affine (1) or a quadratic (2) least-squares fit")
+    ap.add_argument("--perifrac", default=os.path.join(os.path.dirname(__file__), "..", "target",
+                                                       "release", "perifrac"))
+    a = ap.parse_args()
+    unstructured = a.mesh == "unstructured"
+    ghosts = a.ghosts or a.implicit
+    label = (f"{a.mesh}{' ghosts' if ghosts else ''}{' (implicit)' if a.implicit else ''}"
+             f"{' (quadratic)' if ghosts and a.order == 2 else ''}")
+    with tempfile.TemporaryDirectory() as tmp:
+        if a.case == "cantilever":
+            for n in a.cells:
+                err, side = cantilever(a.perifrac, n, unstructured, ghosts, a.implicit,
+                                       a.order, tmp)
+                print(f"{label} {10 * n}x{n}x{n}: tip {100 * err:+.2f}%, "
+                      f"sideways {100 * side:.2f}% of vertical", flush=True)
+        elif a.case == "interior":
+            ratio, count = interior(a.perifrac, unstructured, tmp)
+            print(f"{a.mesh} 32x8x8, {count} particles a horizon from every face: "
+                  f"{ratio:.4f} of the continuum's energy")
+        else:
+            for nu in a.nu:
+                de, got = moduli(a.perifrac, nu, unstructured, ghosts, a.implicit, a.order,
+                                 tmp)
+                print(f"{label} 32x8x8, nu {nu}: E {100 * de:+.2f}%, nu {got:.4f}", flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
