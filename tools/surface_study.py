@@ -81,7 +81,13 @@ def mesh_box(perifrac, length, cells, unstructured, out):
             "-o", out]
     if unstructured:
         args.append("--unstructured")
-    subprocess.run(args, check=True, capture_output=True)
+    try:
+        subprocess.run(args, check=True, capture_output=True, text=True)
+    except FileNotFoundError:
+        sys.exit(f"surface_study: no perifrac at {perifrac}: build it with `cargo build --release "
+                 "-p perifrac` or give its path with --perifrac")
+    except subprocess.CalledProcessError as e:
+        sys.exit(f"surface_study: `{' '.join(args)}` failed:\n{e.stderr}")
     m = meshio.read(out)
     x, t = m.points, m.cells_dict["tetra"]
     p = x[t]
@@ -307,6 +313,10 @@ def main():
     ap.add_argument("--perifrac", default=os.path.join(os.path.dirname(__file__), "..", "target",
                                                        "release", "perifrac"))
     a = ap.parse_args()
+    if min(a.cells) < 1:
+        ap.error("--cells: at least one cell across")
+    if not all(-1 < nu < 0.5 for nu in a.nu):
+        ap.error("--nu: Poisson's ratio must lie in (-1, 0.5)")
     unstructured = a.mesh == "unstructured"
     ghosts = a.ghosts or a.implicit
     label = (f"{a.mesh}{' ghosts' if ghosts else ''}{' (implicit)' if a.implicit else ''}"
