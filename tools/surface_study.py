@@ -26,8 +26,9 @@ read through fitted weights `omega (n n : L_i)` with `sum_j omega (n n : L_i) r 
 and its deviatoric constant `b_i = 15 mu / (2 sum_j omega r^2 V_j)`; the energy
 `sum_i V_i (kappa theta_i^2 / 2 + b_i sum_j omega ed_ij^2 V_j)` with `ed = e - theta r / 3`
 and `e = n . (u_j - u_i)`. The fit's bound (`FIT_BOUND`, a blend towards the scalar
-calibration where a weight passes 10 times it) is left out. Families are horizon balls (on a convex box, where the face walk of
-MODEL.md finds nearly the same). Linear: the benchmarks' loads strain the bars by under 0.3%.
+calibration where a weight passes 10 times it) is left out. Families are horizon balls (on a
+convex box, where the face walk of MODEL.md finds nearly the same). Linear: the benchmarks'
+loads strain the bars by under 0.3%.
 
 `--ghosts`: every particle within a horizon of a side face (y or z) is mirrored across it
 (and across both faces at an edge); a ghost joins the families it falls in, carries no energy
@@ -201,6 +202,13 @@ class Model:
         return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                              shape=(3 * len(g), 3 * na))
 
+    def energy_density(self, u):
+        """Each real particle's energy density (J/m^3) under the displacements `u` (N x 3)."""
+        e = np.einsum("ij,ij->i", self.nv, u[self.j] - u[self.i])
+        theta = np.bincount(self.i, self.dv * e, self.n)
+        ed = e - theta[self.i] * self.r / 3
+        return self.kappa * theta ** 2 / 2 + self.b * np.bincount(self.i, self.wv * ed ** 2, self.n)
+
     def hessian(self):
         """The energy's Hessian over every particle's displacement, ghosts as free points."""
         n, na, nb = self.n, len(self.pos), len(self.i)
@@ -224,7 +232,8 @@ class Model:
         n3 = 3 * self.n
         k = self.hessian()
         if not implicit:
-            g = sp.vstack([sp.identity(n3, format="csr"), self.ghost_rows(False, order)[:, :n3]]).tocsr()
+            ghosts = self.ghost_rows(False, order)[:, :n3]
+            g = sp.vstack([sp.identity(n3, format="csr"), ghosts]).tocsr()
             k = (g.T @ k @ g).tocsr()
             u = u.copy()
             free = ~held
@@ -309,10 +318,7 @@ def interior(perifrac, unstructured, tmp):
     lo, hi = x.min(0), x.max(0)
     inner = np.all((bary - lo > delta) & (hi - bary > delta), axis=1)
     u = (bary - (lo + hi) / 2) @ np.diag([1.0, -0.3, -0.3]) * 1e-3
-    e = np.einsum("ij,ij->i", model.nv, u[model.j] - u[model.i])
-    theta = np.bincount(model.i, model.dv * e, model.n)
-    ed = e - theta[model.i] * model.r / 3
-    w = model.kappa * theta ** 2 / 2 + model.b * np.bincount(model.i, model.wv * ed ** 2, model.n)
+    w = model.energy_density(u)
     return (vol * w)[inner].sum() / (vol[inner].sum() * E0 * 1e-6 / 2), inner.sum()
 
 
@@ -329,7 +335,7 @@ def main():
     ap.add_argument("--implicit", action="store_true",
                     help="ghosts' gradients over their sources' whole families (implies --ghosts)")
     ap.add_argument("--order", type=int, choices=[1, 2], default=1,
-                    help="ghosts extrapolated by an affine (1) or a quadratic (2) least-squares fit")
+                    help="ghosts extrapolated by an affine (1) or quadratic (2) least-squares fit")
     ap.add_argument("--perifrac", help="the perifrac binary (default: target/release's)",
                     default=os.path.join(os.path.dirname(__file__), "..", "target", "release",
                                          "perifrac"))
