@@ -3,14 +3,21 @@ on the accuracy benchmark's bars, with and without ghost particles mirrored acro
 side faces. Independent of perifrac's physics crate (it only calls `perifrac mesh`).
 
     python3 tools/surface_study.py cantilever --mesh unstructured --cells 4 [--ghosts]
+        [--clamp mirror]
     python3 tools/surface_study.py moduli --mesh unstructured --nu 0.3 [--ghosts]
     python3 tools/surface_study.py interior --mesh kuhn
 
 `cantilever`: the 1 x 0.1 x 0.1 m bar of `perifrac bench accuracy --case cantilever` (10 n
 cells along, n across, a clamp layer of ceil(1.5 x 1.3) = 2 cells behind x = 0 held, gravity
 on rho = 1000 kg/m^3, E = 1e8 Pa, nu = 0.3, k = 1.5); prints the tip's deflection (a line
-fitted over the last two cells, at x = 1) against the P2 answer 0.014728 m, and its sideways
-deflection over its vertical one.
+fitted over the last two cells, at x = 1) against the P2 answer 0.014728 m, its sideways
+deflection over its vertical one, and the deflection curve split in two (`curve`): "bending",
+the bar's bending compliance against the continuum's, and "root", shear and the clamp's offset
+and rotation carried to the tip, both over Euler-Bernoulli's tip. `--clamp mirror` replaces
+the held layer by the bar's own image across x = 0 moving as minus its source (the odd
+reflection: zero displacement on the face, right for every field that is zero there and
+linear in x, so to first order only): a ghost layer like the side faces', carrying no energy
+of its own.
 
 `moduli`: the 0.4 x 0.1 x 0.1 m bar of `--case moduli` (32 x 8 x 8 cells, end layers as deep
 as the clamp held, one pulled by 0.1%); prints E (the pulled layer's reaction over the
@@ -18,8 +25,10 @@ section, over the axial strain fitted over the middle third) and nu (the lateral
 fitted there).
 
 `interior`: a 0.4 x 0.1 x 0.1 m bar of 32 x 8 x 8 cells (the moduli bar without its end
-layers) under an affine uniaxial stress along x: the energy of its particles more than a
-horizon from every face over the continuum's (whole families, no surface).
+layers), its particles more than a horizon from every face (whole families, no surface): their
+energy under an affine uniaxial stress along x over the continuum's, and their energy under
+pure bending beyond the continuum's, over `E kappa^2 delta^2`, against its closed form (the
+nonlocal model's own bending stiffness, `bending_excess`).
 
 The model is MODEL.md section 2 with perifrac's default correction: each particle's dilatation
 read through fitted weights `omega (n n : L_i)` with `sum_j omega (n n : L_i) r n n V_j = I`,
@@ -121,9 +130,11 @@ def basis(d, order):
 class Model:
     """Bonds of the real particles (ghosts appended after them) and their constants."""
 
-    def __init__(self, bary, vol, lam, nu, lo, hi, ghosts):
+    def __init__(self, bary, vol, lam, nu, lo, hi, ghosts, clamp=False):
         """Particles at `bary` of volumes `vol`, horizon `K_HORIZON * lam`; with `ghosts`,
-        mirror images across the box `[lo, hi]`'s faces normal to y and z."""
+        mirror images across the box `[lo, hi]`'s faces normal to y and z; with `clamp`, every
+        point (real or ghost) within a horizon of the face `x = lo` mirrored across it, moving
+        as minus its source (the odd reflection: zero displacement on the face)."""
         n = len(bary)
         delta = K_HORIZON * lam
         pts, vols, src = [bary], [vol], [np.arange(n)]
@@ -143,8 +154,19 @@ class Model:
                     pts.append(g[near])
                     vols.append(vol[near])
                     src.append(np.flatnonzero(near))
+        self.nside = sum(len(v) for v in vols)
+        self.csrc = None
+        if clamp:
+            both = np.vstack(pts)
+            near = both[:, 0] - lo[0] < delta
+            g = both[near].copy()
+            g[:, 0] = 2 * lo[0] - g[:, 0]
+            pts.append(g)
+            vols.append(np.concatenate(vols)[near])
+            self.csrc = np.flatnonzero(near)
         self.n, self.bary, self.vol = n, bary, vol
         self.pos, self.src = np.vstack(pts), np.concatenate(src)
+        self.side_pos = self.pos[:self.nside]
         allvol = np.concatenate(vols)
         found = cKDTree(self.pos).query_ball_point(bary, delta, return_sorted=True)
         i = np.repeat(np.arange(n), [len(f) for f in found])
@@ -175,9 +197,9 @@ class Model:
         """(3 m x 3 N): each ghost's displacement `u_p + F_p (X_g - X_p)` from every particle's,
         `F_p` the least-squares gradient over `p`'s real family or, when `whole`, over its whole
         family (ghosts included)."""
-        n, na = self.n, len(self.pos)
+        n, na = self.n, self.nside
         if na == n:
-            return sp.csr_matrix((0, 3 * na))
+            return sp.csr_matrix((0, 3 * len(self.pos)))
         use = np.ones(len(self.i), bool) if whole else self.j < n
         ir, jr, xr, wr = self.i[use], self.j[use], self.xi[use], self.wv[use]
         phi = basis(xr, order)
@@ -189,7 +211,7 @@ class Model:
         end = np.searchsorted(ir, np.arange(n), "right")
         g = np.arange(na - n)
         p = self.src[n:]
-        k = np.einsum("gab,gb->ga", inv[p], basis(self.pos[n:] - self.bary[p], order))
+        k = np.einsum("gab,gb->ga", inv[p], basis(self.side_pos[n:] - self.bary[p], order))
         gi = np.repeat(g, end[p] - start[p])
         bi = np.concatenate([np.arange(s, e) for s, e in zip(start[p], end[p])] + [[]]).astype(int)
         c = wr[bi] * np.einsum("ia,ia->i", phi[bi], k[gi])
@@ -200,7 +222,7 @@ class Model:
             cols += [3 * jr[bi] + ax, 3 * p + ax]
             vals += [c, rest]
         return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(3 * len(g), 3 * na))
+                             shape=(3 * len(g), 3 * len(self.pos)))
 
     def energy_density(self, u):
         """Each real particle's energy density (J/m^3) under the displacements `u` (N x 3)."""
@@ -234,6 +256,9 @@ class Model:
         if not implicit:
             ghosts = self.ghost_rows(False, order)[:, :n3]
             g = sp.vstack([sp.identity(n3, format="csr"), ghosts]).tocsr()
+            if self.csrc is not None:
+                rows = (3 * self.csrc[:, None] + np.arange(3)).ravel()
+                g = sp.vstack([g, -g[rows]]).tocsr()
             k = (g.T @ k @ g).tocsr()
             u = u.copy()
             free = ~held
@@ -256,25 +281,31 @@ class Model:
         return ua[:n3], grad[:n3]
 
 
-def spread(model):
-    """Prints the median, 99th percentile and largest of the correction's two factors."""
-    for name, f in zip(("dilatation", "b"), model.factors):
-        print(f"  {name} factor: median {np.median(f):.2f}, 99% {np.percentile(f, 99):.2f}, "
+def spread(model, order=1, implicit=False):
+    """Prints the median, 99th percentile and largest of the correction's two factors and,
+    with explicit ghosts, of each side ghost's extrapolation gain (the sum of its combination's
+    coefficients' magnitudes: 1 would be a copy of its source)."""
+    rows = model.ghost_rows(False, order)
+    gains = [("dilatation factor", model.factors[0]), ("b factor", model.factors[1])]
+    if rows.shape[0] and not implicit:
+        gains.append(("ghost gain", np.asarray(abs(rows[::3]).sum(axis=1)).ravel()))
+    for name, f in gains:
+        print(f"  {name}: median {np.median(f):.2f}, 99% {np.percentile(f, 99):.2f}, "
               f"max {f.max():.2f}")
 
 
-def cantilever(perifrac, n, unstructured, ghosts, implicit, order, tmp):
-    """The bench's cantilever `n` cells across: the tip's error against P2 and its sideways
-    deflection over its vertical one."""
+def cantilever(perifrac, n, unstructured, ghosts, implicit, order, mirror, tmp):
+    """The bench's cantilever `n` cells across: the tip's error against P2, its sideways
+    deflection over its vertical one, and the deflection curve's two parts (`curve`)."""
     nx = 10 * n
     h = 1.0 / nx
-    clamp = math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)
+    clamp = 0 if mirror else math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)
     x, bary, vol, lam = mesh_box(perifrac, 1 + clamp * h, [nx + clamp, n, n], unstructured,
                                  os.path.join(tmp, "bar.mesh"))
     shift = np.array([clamp * h, 0.05, 0.05])
     x, bary = x - shift, bary - shift
-    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), ghosts)
-    spread(model)
+    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), ghosts, mirror)
+    spread(model, order, implicit)
     f = np.zeros((len(vol), 3))
     f[:, 2] = -RHO * GRAVITY * vol
     u, _ = model.static(np.repeat(bary[:, 0] < 0, 3), np.zeros(3 * len(vol)), f.ravel(),
@@ -282,7 +313,32 @@ def cantilever(perifrac, n, unstructured, ghosts, implicit, order, tmp):
     u = u.reshape(-1, 3)
     tip = bary[:, 0] > 1 - 2 * h
     at_end = [np.polyval(np.polyfit(bary[tip, 0], u[tip, a], 1), 1.0) for a in (1, 2)]
-    return -at_end[1] / P2_TIP - 1, abs(at_end[0]) / -at_end[1]
+    return -at_end[1] / P2_TIP - 1, abs(at_end[0]) / -at_end[1], curve(bary, vol, u, h)
+
+
+def curve(bary, vol, u, h):
+    """Splits the bar's deflection into bending and the root's share. The volume-weighted mean
+    deflection of each slab one cell long (particles binned by their x) beyond 0.2 m from the
+    clamp is fitted as
+    `scale w(x) + g x^2 + b + c x`, `w` Euler-Bernoulli's curve under the bar's weight: its
+    quartic and cubic terms come from bending alone, so `scale - 1` is the bending compliance's
+    error, while shear, the clamp's offset and rotation and any uniform change of curvature land
+    in `g x^2 + b + c x`, returned at the tip over `w(1)` (the root's share). A converged P2
+    answer (scikit-fem, 80 x 8 x 8 cells, scratch) sampled at the particles of the bars 3 to 6
+    cells across gives both within 0.12% of zero (0.4% at 2 across)."""
+    col = np.floor(bary[:, 0] / h).astype(int)
+    real = col >= 0
+    weight = np.bincount(col[real], vol[real])
+    if not np.all(weight > 0):
+        sys.exit("surface_study: a cell column holds no particle")
+    xs = np.bincount(col[real], vol[real] * bary[real, 0]) / weight
+    down = -np.bincount(col[real], vol[real] * u[real, 2]) / weight
+    q, ei = RHO * GRAVITY * 0.01, E0 * 1e-4 / 12
+    w = q * xs ** 2 * (6 - 4 * xs + xs ** 2) / (24 * ei)
+    far = xs > 0.2
+    terms = np.stack([w[far], xs[far] ** 2, np.ones(far.sum()), xs[far]], 1)
+    scale, g, b, c = np.linalg.lstsq(terms, down[far], rcond=None)[0]
+    return scale - 1, (g + b + c) / (q / (8 * ei))
 
 
 def moduli(perifrac, nu, unstructured, ghosts, implicit, order, tmp):
@@ -309,17 +365,43 @@ def moduli(perifrac, nu, unstructured, ghosts, implicit, order, tmp):
 
 
 def interior(perifrac, unstructured, tmp):
-    """Energy over the continuum's under an affine uniaxial stress (nu = 0.3), over the moduli
-    bar's particles more than a horizon from every face: whole families, no surface."""
+    """Over the moduli bar's particles more than a horizon from every face (whole families, no
+    surface), nu = 0.3: the energy under an affine uniaxial stress over the continuum's, and
+    under pure bending (curvature `kappa` about y, the exact linear field, quadratic in
+    position) the energy density beyond the continuum's over `E kappa^2 delta^2` (the bending
+    stiffness of the nonlocal model itself; see `bending_excess`)."""
     x, bary, vol, lam = mesh_box(perifrac, 0.4, [32, 8, 8], unstructured,
                                  os.path.join(tmp, "bar.mesh"))
     model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), False)
     delta = K_HORIZON * lam
     lo, hi = x.min(0), x.max(0)
     inner = np.all((bary - lo > delta) & (hi - bary > delta), axis=1)
-    u = (bary - (lo + hi) / 2) @ np.diag([1.0, -0.3, -0.3]) * 1e-3
-    w = model.energy_density(u)
-    return (vol * w)[inner].sum() / (vol[inner].sum() * E0 * 1e-6 / 2), inner.sum()
+    v = vol[inner]
+    r = bary - (lo + hi) / 2
+    u = r @ np.diag([1.0, -0.3, -0.3]) * 1e-3
+    uniaxial = (v * model.energy_density(u)[inner]).sum() / (v.sum() * E0 * 1e-6 / 2)
+    kappa, nu = 1e-2, 0.3
+    rx, ry, rz = r.T
+    u = np.stack([-kappa * rx * rz, nu * kappa * ry * rz,
+                  kappa * (rx ** 2 + nu * (rz ** 2 - ry ** 2)) / 2], 1)
+    excess = model.energy_density(u) - E0 * kappa ** 2 * rz ** 2 / 2
+    bending = (v * excess[inner]).sum() / v.sum() / (E0 * kappa ** 2 * delta ** 2)
+    return uniaxial, bending, inner.sum()
+
+
+def bending_excess(nu):
+    """The continuum limit of `interior`'s bending figure: pure bending's displacement is
+    quadratic, so a bond of length r reads, beyond the linear strain, the extension
+    `kappa r^2 n_z (nu - (1 + nu) n_x^2) / 2`, odd in the bond's direction, which the
+    dilatation's symmetric fit does not see; the deviatoric term `b sum omega ed^2 V_j` stores its
+    square, with `omega = delta / r` and `b = 15 mu / (2 pi delta^5)` integrated over the
+    horizon ball: `(5 / 4) mu kappa^2 delta^2 <n_z^2 (nu - (1 + nu) n_x^2)^2>`, the mean over
+    directions `nu^2 / 3 - 2 nu (1 + nu) / 15 + (1 + nu)^2 / 35`. Returned over
+    `E kappa^2 delta^2`. A bar of square section H stores `E kappa^2 H^2 / 24` a unit volume
+    in bending, so its bending stiffness is `1 + 24 bending_excess(nu) (delta / H)^2` times
+    the continuum's (0.303 (delta / H)^2 at nu = 0.3)."""
+    mean = nu ** 2 / 3 - 2 * nu * (1 + nu) / 15 + (1 + nu) ** 2 / 35
+    return 1.25 / (2 * (1 + nu)) * mean
 
 
 def main():
@@ -336,6 +418,9 @@ def main():
                     help="ghosts' gradients over their sources' whole families (implies --ghosts)")
     ap.add_argument("--order", type=int, choices=[1, 2], default=1,
                     help="ghosts extrapolated by an affine (1) or quadratic (2) least-squares fit")
+    ap.add_argument("--clamp", choices=["held", "mirror"], default="held",
+                    help="the cantilever's clamp: the bench's held layer behind x = 0, or the "
+                    "bar mirrored across x = 0 moving as minus its source (zero on the face)")
     ap.add_argument("--perifrac", help="the perifrac binary (default: target/release's)",
                     default=os.path.join(os.path.dirname(__file__), "..", "target", "release",
                                          "perifrac"))
@@ -351,6 +436,10 @@ def main():
         ap.error("--order shapes the ghosts: give --ghosts or --implicit")
     if a.case != "cantilever" and "--cells" in given:
         ap.error("--cells is the cantilever's")
+    if a.case != "cantilever" and "--clamp" in given:
+        ap.error("--clamp is the cantilever's")
+    if a.implicit and a.clamp == "mirror":
+        ap.error("--implicit takes the held clamp only")
     if a.case != "moduli" and "--nu" in given:
         ap.error("--nu is the moduli bar's")
     if not os.path.isfile(a.perifrac):
@@ -358,19 +447,24 @@ def main():
                  "`cargo build --release -p perifrac` or give its path")
     unstructured = a.mesh == "unstructured"
     ghosts = a.ghosts or a.implicit
+    mirror = a.clamp == "mirror"
     label = (f"{a.mesh}{' ghosts' if ghosts else ''}{' (implicit)' if a.implicit else ''}"
-             f"{' (quadratic)' if ghosts and a.order == 2 else ''}")
+             f"{' (quadratic)' if ghosts and a.order == 2 else ''}"
+             f"{' mirror clamp' if mirror else ''}")
     with tempfile.TemporaryDirectory() as tmp:
         if a.case == "cantilever":
             for n in a.cells:
-                err, side = cantilever(a.perifrac, n, unstructured, ghosts, a.implicit,
-                                       a.order, tmp)
+                err, side, (bend, root) = cantilever(a.perifrac, n, unstructured, ghosts,
+                                                     a.implicit, a.order, mirror, tmp)
                 print(f"{label} {10 * n}x{n}x{n}: tip {100 * err:+.2f}%, "
-                      f"sideways {100 * side:.2f}% of vertical", flush=True)
+                      f"sideways {100 * side:.2f}% of vertical; bending {100 * bend:+.2f}%, "
+                      f"root {100 * root:+.2f}% of the tip", flush=True)
         elif a.case == "interior":
-            ratio, count = interior(a.perifrac, unstructured, tmp)
+            ratio, bending, count = interior(a.perifrac, unstructured, tmp)
             print(f"{a.mesh} 32x8x8, {count} particles a horizon from every face: "
-                  f"{ratio:.4f} of the continuum's energy")
+                  f"uniaxial stress {ratio:.4f} of the continuum's energy; pure bending "
+                  f"{bending:.5f} E kappa^2 delta^2 above it (continuum limit "
+                  f"{bending_excess(0.3):.5f})")
         else:
             for nu in a.nu:
                 de, got = moduli(a.perifrac, nu, unstructured, ghosts, a.implicit, a.order,
