@@ -3,7 +3,7 @@ on the accuracy benchmark's bars, with and without ghost particles mirrored acro
 side faces. Independent of perifrac's physics crate (it only calls `perifrac mesh`).
 
     python3 tools/surface_study.py cantilever --mesh unstructured --cells 4 [--ghosts]
-        [--clamp mirror]
+        [--clamp mirror|mirror2]
     python3 tools/surface_study.py moduli --mesh unstructured --nu 0.3 [--ghosts]
     python3 tools/surface_study.py interior --mesh kuhn
 
@@ -17,7 +17,9 @@ and rotation carried to the tip, both over Euler-Bernoulli's tip. `--clamp mirro
 the held layer by the bar's own image across x = 0 moving as minus its source (the odd
 reflection: zero displacement on the face, right for every field that is zero there and
 linear in x, so to first order only): a ghost layer like the side faces', carrying no energy
-of its own.
+of its own. `--clamp mirror2` adds to each image the even part the odd reflection flips,
+`u_xx x^2` with `x` the source's depth and `u_xx` from a quadratic fit over the real family
+of its real source: right to second order in x.
 
 `moduli`: the 0.4 x 0.1 x 0.1 m bar of `--case moduli` (32 x 8 x 8 cells, end layers as deep
 as the clamp held, one pulled by 0.1%); prints E (the pulled layer's reaction over the
@@ -130,11 +132,12 @@ def basis(d, order):
 class Model:
     """Bonds of the real particles (ghosts appended after them) and their constants."""
 
-    def __init__(self, bary, vol, lam, nu, lo, hi, ghosts, clamp=False):
+    def __init__(self, bary, vol, lam, nu, lo, hi, ghosts, clamp=0):
         """Particles at `bary` of volumes `vol`, horizon `K_HORIZON * lam`; with `ghosts`,
-        mirror images across the box `[lo, hi]`'s faces normal to y and z; with `clamp`, every
-        point (real or ghost) within a horizon of the face `x = lo` mirrored across it, moving
-        as minus its source (the odd reflection: zero displacement on the face)."""
+        mirror images across the box `[lo, hi]`'s faces normal to y and z; with `clamp` 1 or
+        2, every point (real or ghost) within a horizon of the face `x = lo` mirrored across
+        it, moving as minus its source (the odd reflection: zero displacement on the face) and,
+        at 2, plus `u_xx x^2` (see `static`)."""
         n = len(bary)
         delta = K_HORIZON * lam
         pts, vols, src = [bary], [vol], [np.arange(n)]
@@ -155,7 +158,7 @@ class Model:
                     vols.append(vol[near])
                     src.append(np.flatnonzero(near))
         self.nside = sum(len(v) for v in vols)
-        self.csrc = None
+        self.csrc, self.clamp = None, clamp
         if clamp:
             both = np.vstack(pts)
             near = both[:, 0] - lo[0] < delta
@@ -164,6 +167,7 @@ class Model:
             pts.append(g)
             vols.append(np.concatenate(vols)[near])
             self.csrc = np.flatnonzero(near)
+            self.depth = both[near, 0] - lo[0]
         self.n, self.bary, self.vol = n, bary, vol
         self.pos, self.src = np.vstack(pts), np.concatenate(src)
         self.side_pos = self.pos[:self.nside]
@@ -224,6 +228,26 @@ class Model:
         return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                              shape=(3 * len(g), 3 * len(self.pos)))
 
+    def curvature(self):
+        """(3 N x 3 N): each real particle's `u_xx` from the quadratic least-squares fit over
+        its real family."""
+        n = self.n
+        use = self.j < n
+        ir, jr, wr = self.i[use], self.j[use], self.wv[use]
+        phi = basis(self.xi[use], 2)
+        shape = np.zeros((n, 9, 9))
+        np.add.at(shape, ir, wr[:, None, None] * phi[:, :, None] * phi[:, None, :])
+        # row 3 of the inverse reads the coefficient of x^2 / 2, which is u_xx
+        c = wr * np.einsum("ia,ia->i", phi, np.linalg.inv(shape)[ir, 3, :])
+        rest = -np.bincount(ir, c, n)
+        rows, cols, vals = [], [], []
+        for ax in range(3):
+            rows += [3 * ir + ax, 3 * np.arange(n) + ax]
+            cols += [3 * jr + ax, 3 * np.arange(n) + ax]
+            vals += [c, rest]
+        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                             shape=(3 * n, 3 * n))
+
     def energy_density(self, u):
         """Each real particle's energy density (J/m^3) under the displacements `u` (N x 3)."""
         e = np.einsum("ij,ij->i", self.nv, u[self.j] - u[self.i])
@@ -258,7 +282,15 @@ class Model:
             g = sp.vstack([sp.identity(n3, format="csr"), ghosts]).tocsr()
             if self.csrc is not None:
                 rows = (3 * self.csrc[:, None] + np.arange(3)).ravel()
-                g = sp.vstack([g, -g[rows]]).tocsr()
+                image = -g[rows]
+                if self.clamp == 2:
+                    # A field zero on the face is odd there up to its even part `u_xx x^2 / 2`,
+                    # which the odd image flips: add it back twice, `u_xx` from the quadratic
+                    # fit over the real family of the point's real source.
+                    real = np.concatenate([np.arange(self.n), self.src[self.n:]])[self.csrc]
+                    at = (3 * real[:, None] + np.arange(3)).ravel()
+                    image = image + sp.diags(np.repeat(self.depth ** 2, 3)) @ self.curvature()[at]
+                g = sp.vstack([g, image]).tocsr()
             k = (g.T @ k @ g).tocsr()
             u = u.copy()
             free = ~held
@@ -295,11 +327,12 @@ def spread(model, order=1, implicit=False):
 
 
 def cantilever(perifrac, n, unstructured, ghosts, implicit, order, mirror, tmp):
-    """The bench's cantilever `n` cells across: the tip's error against P2, its sideways
+    """The bench's cantilever `n` cells across, clamped by the held layer (`mirror` 0) or a
+    mirror image to first or second order (1, 2): the tip's error against P2, its sideways
     deflection over its vertical one, and the deflection curve's two parts (`curve`)."""
     nx = 10 * n
     h = 1.0 / nx
-    clamp = 0 if mirror else math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)
+    clamp = 0 if mirror else math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)  # held cells
     x, bary, vol, lam = mesh_box(perifrac, 1 + clamp * h, [nx + clamp, n, n], unstructured,
                                  os.path.join(tmp, "bar.mesh"))
     shift = np.array([clamp * h, 0.05, 0.05])
@@ -418,9 +451,10 @@ def main():
                     help="ghosts' gradients over their sources' whole families (implies --ghosts)")
     ap.add_argument("--order", type=int, choices=[1, 2], default=1,
                     help="ghosts extrapolated by an affine (1) or quadratic (2) least-squares fit")
-    ap.add_argument("--clamp", choices=["held", "mirror"], default="held",
+    ap.add_argument("--clamp", choices=["held", "mirror", "mirror2"], default="held",
                     help="the cantilever's clamp: the bench's held layer behind x = 0, or the "
-                    "bar mirrored across x = 0 moving as minus its source (zero on the face)")
+                    "bar mirrored across x = 0 moving as minus its source (zero on the face), "
+                    "to first or second order")
     ap.add_argument("--perifrac", help="the perifrac binary (default: target/release's)",
                     default=os.path.join(os.path.dirname(__file__), "..", "target", "release",
                                          "perifrac"))
@@ -438,7 +472,7 @@ def main():
         ap.error("--cells is the cantilever's")
     if a.case != "cantilever" and "--clamp" in given:
         ap.error("--clamp is the cantilever's")
-    if a.implicit and a.clamp == "mirror":
+    if a.implicit and a.clamp != "held":
         ap.error("--implicit takes the held clamp only")
     if a.case != "moduli" and "--nu" in given:
         ap.error("--nu is the moduli bar's")
@@ -447,10 +481,10 @@ def main():
                  "`cargo build --release -p perifrac` or give its path")
     unstructured = a.mesh == "unstructured"
     ghosts = a.ghosts or a.implicit
-    mirror = a.clamp == "mirror"
+    mirror = ["held", "mirror", "mirror2"].index(a.clamp)
     label = (f"{a.mesh}{' ghosts' if ghosts else ''}{' (implicit)' if a.implicit else ''}"
              f"{' (quadratic)' if ghosts and a.order == 2 else ''}"
-             f"{' mirror clamp' if mirror else ''}")
+             f"{['', ' mirror clamp', ' second-order mirror clamp'][mirror]}")
     with tempfile.TemporaryDirectory() as tmp:
         if a.case == "cantilever":
             for n in a.cells:
