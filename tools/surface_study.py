@@ -170,7 +170,7 @@ class Model:
             self.depth = both[near, 0] - lo[0]
         self.n, self.bary, self.vol = n, bary, vol
         self.pos, self.src = np.vstack(pts), np.concatenate(src)
-        self.side_pos = self.pos[:self.nside]
+        self.rows = {}
         allvol = np.concatenate(vols)
         found = cKDTree(self.pos).query_ball_point(bary, delta, return_sorted=True)
         i = np.repeat(np.arange(n), [len(f) for f in found])
@@ -197,56 +197,53 @@ class Model:
         self.factors = (dil / (9 / (4 * math.pi * delta ** 4)),
                         self.b / (15 * mu / (2 * math.pi * delta ** 5)))
 
+    def fit(self, whole, order):
+        """The least-squares fit over each real particle's real family (or, when `whole`, its
+        whole family): the bonds used (`ir`, `jr`, `wr`: ends and `omega V_j`), their basis
+        terms `phi` and each particle's inverse moment `inv` (n x terms x terms)."""
+        use = np.ones(len(self.i), bool) if whole else self.j < self.n
+        ir, jr, wr = self.i[use], self.j[use], self.wv[use]
+        phi = basis(self.xi[use], order)
+        size = phi.shape[1]
+        shape = np.zeros((self.n, size, size))
+        np.add.at(shape, ir, wr[:, None, None] * phi[:, :, None] * phi[:, None, :])
+        return ir, jr, wr, phi, np.linalg.inv(shape)
+
     def ghost_rows(self, whole, order=1):
         """(3 m x 3 N): each ghost's displacement `u_p + F_p (X_g - X_p)` from every particle's,
         `F_p` the least-squares gradient over `p`'s real family or, when `whole`, over its whole
-        family (ghosts included)."""
+        family (ghosts included). Built once for each `(whole, order)`."""
+        key = (whole, order)
+        if key not in self.rows:
+            self.rows[key] = self.build_ghost_rows(whole, order)
+        return self.rows[key]
+
+    def build_ghost_rows(self, whole, order):
+        """`ghost_rows`, computed."""
         n, na = self.n, self.nside
         if na == n:
             return sp.csr_matrix((0, 3 * len(self.pos)))
-        use = np.ones(len(self.i), bool) if whole else self.j < n
-        ir, jr, xr, wr = self.i[use], self.j[use], self.xi[use], self.wv[use]
-        phi = basis(xr, order)
-        size = phi.shape[1]
-        shape = np.zeros((n, size, size))
-        np.add.at(shape, ir, wr[:, None, None] * phi[:, :, None] * phi[:, None, :])
-        inv = np.linalg.inv(shape)
+        ir, jr, wr, phi, inv = self.fit(whole, order)
         start = np.searchsorted(ir, np.arange(n))
         end = np.searchsorted(ir, np.arange(n), "right")
         g = np.arange(na - n)
         p = self.src[n:]
-        k = np.einsum("gab,gb->ga", inv[p], basis(self.side_pos[n:] - self.bary[p], order))
+        k = np.einsum("gab,gb->ga", inv[p], basis(self.pos[n:na] - self.bary[p], order))
         gi = np.repeat(g, end[p] - start[p])
         bi = np.concatenate([np.arange(s, e) for s, e in zip(start[p], end[p])] + [[]]).astype(int)
         c = wr[bi] * np.einsum("ia,ia->i", phi[bi], k[gi])
-        rest = 1 - np.bincount(gi, c, len(g))
-        rows, cols, vals = [], [], []
-        for ax in range(3):
-            rows += [3 * gi + ax, 3 * g + ax]
-            cols += [3 * jr[bi] + ax, 3 * p + ax]
-            vals += [c, rest]
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(3 * len(g), 3 * len(self.pos)))
+        return per_axis(gi, jr[bi], c, g, p, 1 - np.bincount(gi, c, len(g)),
+                        (3 * len(g), 3 * len(self.pos)))
 
     def curvature(self):
         """(3 N x 3 N): each real particle's `u_xx` from the quadratic least-squares fit over
         its real family."""
         n = self.n
-        use = self.j < n
-        ir, jr, wr = self.i[use], self.j[use], self.wv[use]
-        phi = basis(self.xi[use], 2)
-        shape = np.zeros((n, 9, 9))
-        np.add.at(shape, ir, wr[:, None, None] * phi[:, :, None] * phi[:, None, :])
+        ir, jr, wr, phi, inv = self.fit(False, 2)
         # row 3 of the inverse reads the coefficient of x^2 / 2, which is u_xx
-        c = wr * np.einsum("ia,ia->i", phi, np.linalg.inv(shape)[ir, 3, :])
-        rest = -np.bincount(ir, c, n)
-        rows, cols, vals = [], [], []
-        for ax in range(3):
-            rows += [3 * ir + ax, 3 * np.arange(n) + ax]
-            cols += [3 * jr + ax, 3 * np.arange(n) + ax]
-            vals += [c, rest]
-        return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                             shape=(3 * n, 3 * n))
+        c = wr * np.einsum("ia,ia->i", phi, inv[ir, 3, :])
+        own = np.arange(n)
+        return per_axis(ir, jr, c, own, own, -np.bincount(ir, c, n), (3 * n, 3 * n))
 
     def energy_density(self, u):
         """Each real particle's energy density (J/m^3) under the displacements `u` (N x 3)."""
@@ -313,6 +310,19 @@ class Model:
         return ua[:n3], grad[:n3]
 
 
+def per_axis(rows, cols, vals, own_rows, own_cols, own_vals, shape):
+    """The sparse matrix (`shape`) of a scalar combination applied to each of the three
+    displacement components: `vals` at point `(rows, cols)` and `own_vals` at
+    `(own_rows, own_cols)`, each point index `k` standing for the dofs `3 k + axis`."""
+    r, c, v = [], [], []
+    for ax in range(3):
+        r += [3 * rows + ax, 3 * own_rows + ax]
+        c += [3 * cols + ax, 3 * own_cols + ax]
+        v += [vals, own_vals]
+    return sp.csr_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))),
+                         shape=shape)
+
+
 def spread(model, order=1, implicit=False):
     """Prints the median, 99th percentile and largest of the correction's two factors and,
     with explicit ghosts, of each side ghost's extrapolation gain (the sum of its combination's
@@ -326,18 +336,18 @@ def spread(model, order=1, implicit=False):
               f"max {f.max():.2f}")
 
 
-def cantilever(perifrac, n, unstructured, ghosts, implicit, order, mirror, tmp):
-    """The bench's cantilever `n` cells across, clamped by the held layer (`mirror` 0) or a
+def cantilever(perifrac, n, unstructured, ghosts, implicit, order, image, tmp):
+    """The bench's cantilever `n` cells across, clamped by the held layer (`image` 0) or a
     mirror image to first or second order (1, 2): the tip's error against P2, its sideways
     deflection over its vertical one, and the deflection curve's two parts (`curve`)."""
     nx = 10 * n
     h = 1.0 / nx
-    clamp = 0 if mirror else math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)  # held cells
-    x, bary, vol, lam = mesh_box(perifrac, 1 + clamp * h, [nx + clamp, n, n], unstructured,
+    held = 0 if image else math.ceil(K_HORIZON * KUHN_EDGE_PER_CELL)  # cells behind x = 0
+    x, bary, vol, lam = mesh_box(perifrac, 1 + held * h, [nx + held, n, n], unstructured,
                                  os.path.join(tmp, "bar.mesh"))
-    shift = np.array([clamp * h, 0.05, 0.05])
+    shift = np.array([held * h, 0.05, 0.05])
     x, bary = x - shift, bary - shift
-    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), ghosts, mirror)
+    model = Model(bary, vol, lam, 0.3, x.min(0), x.max(0), ghosts, image)
     spread(model, order, implicit)
     f = np.zeros((len(vol), 3))
     f[:, 2] = -RHO * GRAVITY * vol
@@ -352,11 +362,11 @@ def cantilever(perifrac, n, unstructured, ghosts, implicit, order, mirror, tmp):
 def curve(bary, vol, u, h):
     """Splits the bar's deflection into bending and the root's share. The volume-weighted mean
     deflection of each slab one cell long (particles binned by their x) beyond 0.2 m from the
-    clamp is fitted as
-    `scale w(x) + g x^2 + b + c x`, `w` Euler-Bernoulli's curve under the bar's weight: its
-    quartic and cubic terms come from bending alone, so `scale - 1` is the bending compliance's
-    error, while shear, the clamp's offset and rotation and any uniform change of curvature land
-    in `g x^2 + b + c x`, returned at the tip over `w(1)` (the root's share). A converged P2
+    clamp is fitted as `scale w(x) + g x^2 + b + c x`, `w` Euler-Bernoulli's curve under the
+    bar's weight: its quartic and cubic terms come from bending alone, so `scale - 1` is the
+    bending compliance's error, while shear, the clamp's offset and rotation and any uniform
+    change of curvature land in `g x^2 + b + c x`, returned at the tip over `w(1)` (the root's
+    share). A converged P2
     answer (scikit-fem, 80 x 8 x 8 cells, scratch) sampled at the particles of the bars 3 to 6
     cells across gives both within 0.12% of zero (0.4% at 2 across)."""
     col = np.floor(bary[:, 0] / h).astype(int)
@@ -481,15 +491,15 @@ def main():
                  "`cargo build --release -p perifrac` or give its path")
     unstructured = a.mesh == "unstructured"
     ghosts = a.ghosts or a.implicit
-    mirror = ["held", "mirror", "mirror2"].index(a.clamp)
+    image = ["held", "mirror", "mirror2"].index(a.clamp)
     label = (f"{a.mesh}{' ghosts' if ghosts else ''}{' (implicit)' if a.implicit else ''}"
              f"{' (quadratic)' if ghosts and a.order == 2 else ''}"
-             f"{['', ' mirror clamp', ' second-order mirror clamp'][mirror]}")
+             f"{['', ' mirror clamp', ' second-order mirror clamp'][image]}")
     with tempfile.TemporaryDirectory() as tmp:
         if a.case == "cantilever":
             for n in a.cells:
                 err, side, (bend, root) = cantilever(a.perifrac, n, unstructured, ghosts,
-                                                     a.implicit, a.order, mirror, tmp)
+                                                     a.implicit, a.order, image, tmp)
                 print(f"{label} {10 * n}x{n}x{n}: tip {100 * err:+.2f}%, "
                       f"sideways {100 * side:.2f}% of vertical; bending {100 * bend:+.2f}%, "
                       f"root {100 * root:+.2f}% of the tip", flush=True)
