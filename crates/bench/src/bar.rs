@@ -3,8 +3,9 @@
 
 use perifrac_physics::{
     stable_frequency, ChenMaterial, ChenModel, ChenOptions, Curve, Discretization, Explicit,
-    ExplicitConfig, ForceModel, Implicit, ImplicitConfig, Integrator, Loads, PhysicsError,
-    QuasiNewtonModel, Simulation, TimeStep, Vec3, XuMaterial, XuModel, XuModuli, XuOptions,
+    ExplicitConfig, ForceModel, GhostFit, GhostPlane, GhostReport, Ghosted, Implicit,
+    ImplicitConfig, Integrator, Loads, PhysicsError, QuasiNewtonModel, Simulation, TimeStep, Vec3,
+    XuMaterial, XuModel, XuModuli, XuOptions,
 };
 use perifrac_topology::mesher::box_cut_data;
 pub(crate) use perifrac_topology::mesher::BoxCut as Cut;
@@ -33,6 +34,12 @@ pub(crate) trait PdMaterial {
 
     /// The model of this one material over `disc`.
     fn model(&self, disc: Discretization) -> Result<Self::Model, PhysicsError>;
+
+    /// What the build of `model`'s ghosts found, when it has ghosts.
+    fn ghosts(model: &Self::Model) -> Option<GhostReport> {
+        let _ = model;
+        None
+    }
 }
 
 /// Chen's material with the scalar calibration (`correction = "calibrated"`): the tables'
@@ -62,6 +69,31 @@ impl PdMaterial for FittedChen {
             ..ChenOptions::default()
         };
         ChenModel::with_options(disc, std::slice::from_ref(&self.0), options)
+    }
+}
+
+/// Chen's material with the fitted dilatation over families completed by ghosts across
+/// `planes` (`perifrac_physics::ghost`), extrapolated as `fit` says.
+#[derive(Debug, Clone)]
+pub(crate) struct GhostedChen {
+    /// The material.
+    pub material: ChenMaterial,
+    /// The faces mirrored, in the bar's own coordinates.
+    pub planes: Vec<GhostPlane>,
+    /// Affine or quadratic ghosts.
+    pub fit: GhostFit,
+}
+
+impl PdMaterial for GhostedChen {
+    type Model = Ghosted<ChenModel>;
+
+    fn model(&self, disc: Discretization) -> Result<Ghosted<ChenModel>, PhysicsError> {
+        let m = std::slice::from_ref(&self.material);
+        Ghosted::chen(disc, m, ChenOptions::default(), &self.planes, self.fit)
+    }
+
+    fn ghosts(model: &Ghosted<ChenModel>) -> Option<GhostReport> {
+        Some(model.layer().report().clone())
     }
 }
 

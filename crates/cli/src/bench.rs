@@ -26,7 +26,7 @@ pub enum Which {
         #[command(flatten)]
         common: Common,
         /// Only these cases (cantilever, swing, twist, moduli, wave_speed, xu_bend, xu_twist,
-        /// shell_strip, shell_plate, shell_membrane); default all.
+        /// shell_strip, shell_plate, shell_membrane, ghosts); default all.
         #[arg(long, value_delimiter = ',')]
         case: Vec<String>,
     },

@@ -140,6 +140,23 @@ impl Family {
         ))
     }
 
+    /// Bonds given row by row: particle `i`'s neighbours are
+    /// `neighbours[offsets[i]..offsets[i + 1]]`, each row sorted, the pairs symmetric (the
+    /// caller's duty); rest lengths from `positions` (m).
+    pub(crate) fn from_rows(positions: &[Vec3], offsets: Vec<u32>, neighbours: Vec<u32>) -> Family {
+        let mut rest_lengths = vec![0.0; neighbours.len()];
+        let (offs, nbs) = (offsets.as_slice(), neighbours.as_slice());
+        for_each_row(offs, &mut rest_lengths, &|i, rl: &mut [f64]| {
+            let row = &nbs[offs[i] as usize..offs[i + 1] as usize];
+            crate::material::lanes::lengths(positions, i, row, rl);
+        });
+        Family {
+            offsets,
+            neighbours,
+            rest_lengths,
+        }
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.offsets.len() - 1

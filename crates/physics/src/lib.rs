@@ -34,6 +34,7 @@ pub mod environment;
 pub mod error;
 pub mod family;
 pub mod fracture;
+pub mod ghost;
 pub mod integrate;
 pub mod loads;
 pub mod material;
@@ -48,6 +49,7 @@ pub use environment::{Environment, External, ImplicitEnvironment, NoEnvironment}
 pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
+pub use ghost::{FaceKind, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted};
 pub use integrate::{
     EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,
     QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,

@@ -70,6 +70,23 @@ impl Discretization {
         ))
     }
 
+    /// A discretisation from its parts, the family built by the caller over `rest_positions`.
+    pub(crate) fn from_parts(
+        rest_positions: Vec<Vec3>,
+        volumes: Vec<f64>,
+        materials: Vec<u16>,
+        horizon: f64,
+        family: Family,
+    ) -> Self {
+        Discretization {
+            rest_positions,
+            volumes,
+            materials,
+            horizon,
+            family,
+        }
+    }
+
     /// Assigns a material (region) id to every particle; checked against the material list when
     /// a model is built.
     pub fn set_materials(&mut self, ids: &[u16]) -> Result<(), PhysicsError> {

@@ -12,14 +12,15 @@
 use std::time::Instant;
 
 use perifrac_fem::{static_linear, Sampler};
-use perifrac_physics::{ChenModel, Explicit, Loads};
+use perifrac_physics::{Explicit, FaceKind, GhostPlane, GhostReport, Loads};
 
 use super::{
     clamped_fem_bar, material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, LENGTH,
     POISSON, SIDE, YOUNG,
 };
 use crate::bar::{
-    cells_across, clamped_bar, fit_line, rest_of, Cut, FittedChen, KUHN, UNSTRUCTURED_SEED,
+    cells_across, clamped_bar, cut_body, fit_line, rest_of, Cut, FittedChen, PdMaterial, KUHN,
+    UNSTRUCTURED_SEED,
 };
 use crate::table::Table;
 use crate::{BenchError, Effort};
@@ -34,7 +35,7 @@ pub const TIMOSHENKO: f64 = 0.014865;
 pub const SCIKIT_FEM: f64 = 0.014728;
 
 /// First bending frequency of the clamped bar, Euler-Bernoulli (rad/s).
-fn omega1() -> f64 {
+pub(crate) fn omega1() -> f64 {
     let i = SIDE.powi(4) / 12.0;
     1.875104f64.powi(2) * (YOUNG * i / (DENSITY * SIDE * SIDE * LENGTH.powi(4))).sqrt()
 }
@@ -53,17 +54,72 @@ fn series(fitted: bool, cut: Cut) -> String {
 /// (with the fitted dilatation when `fitted`) on the mesh `cut`, the relative change over the
 /// last tenth of the relaxation and the tip's sideways deflection over its vertical one.
 fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, f64), BenchError> {
+    let n = cells_across(nx);
+    let case = format!("cantilever PD {nx}x{n}x{n} k={k}");
+    let m = material(&case, POISSON)?;
+    let method = series(fitted, cut);
+    let (run, moved, sideways, _) = if fitted {
+        relax(nx, k, &FittedChen(m), cut, Clamp::Held, method)?
+    } else {
+        relax(nx, k, &m, cut, Clamp::Held, method)?
+    };
+    Ok((run, moved, sideways))
+}
+
+/// How the bar is held at x = 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Clamp {
+    /// A layer of held particles at least one horizon thick behind x = 0 (the benchmark's).
+    Held,
+    /// No layer: the model mirrors the bar across x = 0 (a clamped ghost face,
+    /// `perifrac_physics::FaceKind::Clamped`), so nothing is held.
+    Mirror,
+}
+
+/// The bar's side faces (free) and, with [`Clamp::Mirror`], the face x = 0 (clamped): the
+/// planes of a ghosted model of it.
+pub(crate) fn bar_planes(clamp: Clamp) -> Vec<GhostPlane> {
+    let h = SIDE / 2.0;
+    let faces = GhostPlane::box_faces([0.0, -h, -h], [LENGTH, h, h]);
+    let mut planes = faces[2..].to_vec();
+    if clamp == Clamp::Mirror {
+        planes.push(GhostPlane {
+            kind: FaceKind::Clamped,
+            ..faces[0]
+        });
+    }
+    planes
+}
+
+/// [`peridynamics`] for any material, held as `clamp` says; the run is named `method`. With
+/// the three figures, what the build of the model's ghosts found, when it has them.
+pub(crate) fn relax<T: PdMaterial>(
+    nx: usize,
+    k: f64,
+    material: &T,
+    cut: Cut,
+    clamp: Clamp,
+    method: String,
+) -> Result<(Run, f64, f64, Option<GhostReport>), BenchError> {
     let started = Instant::now();
     let n = cells_across(nx);
     let h = LENGTH / nx as f64;
     let case = format!("cantilever PD {nx}x{n}x{n} k={k}");
-    let m = material(&case, POISSON)?;
-    let (b, held) = if fitted {
-        clamped_bar(&case, LENGTH, SIDE, nx, k, &FittedChen(m), cut)?
-    } else {
-        clamped_bar(&case, LENGTH, SIDE, nx, k, &m, cut)?
+    let (b, held) = match clamp {
+        Clamp::Held => clamped_bar(&case, LENGTH, SIDE, nx, k, material, cut)?,
+        Clamp::Mirror => {
+            let (lo, hi) = (
+                [0.0, -SIDE / 2.0, -SIDE / 2.0],
+                [LENGTH, SIDE / 2.0, SIDE / 2.0],
+            );
+            (
+                cut_body(&case, lo, hi, [nx, n, n], k, material, cut)?,
+                Vec::new(),
+            )
+        }
     };
     let bonds = b.bonds();
+    let ghosts = T::ghosts(&b.model);
     let tip = b.select(|x| x[0] > LENGTH - 2.0 * h);
     let w1 = omega1();
     let physics = |cause| BenchError::Physics {
@@ -78,7 +134,7 @@ fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, 
     let mut s = b.solver(&case, loads)?;
     let steps = (12.0 / w1 / s.dt()).ceil() as u64;
     // The tip's displacement along `axis`, from a line fitted along the last two cells.
-    let tip_at = |s: &Explicit<ChenModel>, axis: usize| {
+    let tip_at = |s: &Explicit<T::Model>, axis: usize| {
         let (y, rest) = (s.positions(), rest_of(s));
         let x: Vec<f64> = tip.iter().map(|&i| rest[i as usize][0]).collect();
         let u: Vec<f64> = tip
@@ -88,7 +144,7 @@ fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, 
         let (a, slope) = fit_line(&x, &u);
         a + slope * LENGTH
     };
-    let deflection = |s: &Explicit<ChenModel>| -tip_at(s, 2);
+    let deflection = |s: &Explicit<T::Model>| -tip_at(s, 2);
     let mut at_90 = 0.0;
     for step in 0..steps {
         s.step().map_err(physics)?;
@@ -99,11 +155,11 @@ fn peridynamics(nx: usize, k: f64, fitted: bool, cut: Cut) -> Result<(Run, f64, 
     let value = deflection(&s);
     let sideways = tip_at(&s, 1).abs() / value;
     let run = Run {
-        method: series(fitted, cut),
+        method,
         value,
         ..Run::peridynamics([nx, n, n], k, started, steps, bonds)
     };
-    Ok((run, (value - at_90).abs() / value, sideways))
+    Ok((run, (value - at_90).abs() / value, sideways, ghosts))
 }
 
 /// Tip deflection (m) by linear elasticity on `nx` cells along the bar, P1 or P2.

@@ -3,6 +3,7 @@
 //! reference, and every reference is shown converged in its own table.
 
 mod cantilever;
+mod ghosts;
 mod motion;
 mod motion_runs;
 mod shells;
@@ -21,6 +22,7 @@ use crate::table::Table;
 use crate::{BenchError, Effort};
 
 pub use cantilever::{cantilever, EULER_BERNOULLI, SCIKIT_FEM, TIMOSHENKO};
+pub use ghosts::ghosts;
 pub use motion::{swing, twist};
 pub use shells::{navier_centre, shell_membrane, shell_plate, shell_strip};
 pub use waves::{moduli, wave_speed};
@@ -132,7 +134,7 @@ pub struct CaseReport {
 }
 
 /// The accuracy cases by name, in report order.
-pub const CASES: [&str; 10] = [
+pub const CASES: [&str; 11] = [
     "cantilever",
     "swing",
     "twist",
@@ -143,6 +145,7 @@ pub const CASES: [&str; 10] = [
     "shell_strip",
     "shell_plate",
     "shell_membrane",
+    "ghosts",
 ];
 
 /// Runs the accuracy cases at `effort` (those named in `only`, or all), telling `progress`
@@ -183,6 +186,7 @@ pub fn run_case(
         "shell_strip" => shell_strip(effort, progress),
         "shell_plate" => shell_plate(effort, progress),
         "shell_membrane" => shell_membrane(effort, progress),
+        "ghosts" => ghosts(effort, progress),
         other => Err(BenchError::UnknownCase(other.into())),
     }
 }

@@ -121,16 +121,21 @@ pub(super) const SAMPLES: usize = 30;
 pub(super) type Trajectory = Vec<Vec<Vec3>>;
 
 /// The corotated P2 reference: its problem and the nodal displacements at each sample time.
-struct Reference {
+pub(super) struct Reference {
     problem: Problem,
     displacements: Vec<Vec<Vec3>>,
-    wall_s: f64,
+    /// Wall time of the run (s).
+    pub wall_s: f64,
     steps: u64,
 }
 
 impl Reference {
     /// Runs the reference on `nx` cells along at `dt_fraction` of its stable estimate.
-    fn run(motion: Motion, nx: usize, dt_fraction: f64) -> Result<Reference, BenchError> {
+    pub(super) fn run(
+        motion: Motion,
+        nx: usize,
+        dt_fraction: f64,
+    ) -> Result<Reference, BenchError> {
         let started = Instant::now();
         let case = format!("{} FEM P2 {nx} cells", motion.name());
         let fem = |cause| BenchError::Fem {
@@ -174,7 +179,7 @@ impl Reference {
     }
 
     /// Positions of the rest points `points` (inside the bar) at each sample time.
-    fn at(&self, points: &[Vec3]) -> Result<Trajectory, BenchError> {
+    pub(super) fn at(&self, points: &[Vec3]) -> Result<Trajectory, BenchError> {
         let sampler =
             Sampler::new(self.problem.mesh(), points).map_err(|cause| BenchError::Fem {
                 case: "sampling the reference".into(),
@@ -195,7 +200,7 @@ impl Reference {
 }
 
 /// Largest distance between two trajectories over points and samples, over the diagonal.
-fn deviation(a: &Trajectory, b: &Trajectory) -> f64 {
+pub(super) fn deviation(a: &Trajectory, b: &Trajectory) -> f64 {
     a.iter()
         .zip(b)
         .map(|(pa, pb)| deviation_at(pa, pb))

@@ -9,13 +9,16 @@
 
 use std::time::Instant;
 
-use perifrac_physics::{Implicit, ImplicitConfig, Loads, Solver, Vec3, XuMaterial, XuModel};
+use perifrac_physics::{
+    GhostFit, Implicit, ImplicitConfig, Loads, Solver, Vec3, XuMaterial, XuModel,
+};
 
+use super::cantilever::{bar_planes, Clamp};
 use super::motion::{Motion, Trajectory, SAMPLES};
 use super::{Run, DENSITY, LENGTH, SIDE};
 use crate::bar::{
     cells_across, clamped_bar, rest_of, set_velocities, xu_neo_hookean, Cut, FittedChen,
-    PdMaterial, KUHN, UNSTRUCTURED_SEED,
+    GhostedChen, PdMaterial, KUHN, UNSTRUCTURED_SEED,
 };
 use crate::BenchError;
 
@@ -32,6 +35,10 @@ pub(super) enum Method {
     /// Chen's model on unstructured tets (the scenes' default box, seed 1), calibrated
     /// (`false`) or fitted (`true`), velocity Verlet.
     ChenUnstructured(bool),
+    /// Chen's model with the fitted dilatation over families completed by ghosts across the
+    /// bar's four side faces (`perifrac_physics::ghost`), on unstructured tets, velocity
+    /// Verlet: the `ghosts` case's runs, not the motion cases'.
+    ChenGhosts(GhostFit),
     /// Xu's model, velocity Verlet.
     XuExplicit,
     /// Xu's model, the implicit quasi-Newton step, this many steps per frame.
@@ -46,6 +53,8 @@ impl Method {
             Method::ChenFitted => "PD Chen fitted explicit".into(),
             Method::ChenUnstructured(false) => "PD Chen explicit unstructured".into(),
             Method::ChenUnstructured(true) => "PD Chen fitted explicit unstructured".into(),
+            Method::ChenGhosts(GhostFit::Affine) => "PD Chen affine ghosts explicit".into(),
+            Method::ChenGhosts(GhostFit::Quadratic) => "PD Chen quadratic ghosts explicit".into(),
             Method::XuExplicit => "PD Xu explicit".into(),
             Method::XuImplicit(n) => format!("PD Xu implicit {n}/frame"),
         }
@@ -69,6 +78,14 @@ impl Method {
             }
             Method::ChenUnstructured(true) => {
                 let m = FittedChen(motion.material());
+                explicit(motion, nx, k, &m, self, UNSTRUCTURED)
+            }
+            Method::ChenGhosts(fit) => {
+                let m = GhostedChen {
+                    material: motion.material(),
+                    planes: bar_planes(Clamp::Held),
+                    fit,
+                };
                 explicit(motion, nx, k, &m, self, UNSTRUCTURED)
             }
             Method::XuExplicit => explicit(motion, nx, k, &xu_material(motion)?, self, KUHN),

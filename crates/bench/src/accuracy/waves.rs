@@ -7,13 +7,14 @@
 
 use std::time::Instant;
 
-use perifrac_physics::{ChenModel, Explicit, Loads};
+use perifrac_physics::{ChenModel, Explicit, GhostReport, Loads};
 
 use super::{
     material, table_and_plot, CaseReport, Run, DENSITY, HORIZON_FACTORS, POISSON, SIDE, YOUNG,
 };
 use crate::bar::{
-    cut_body, fit_line, rest_of, set_velocities, Body, Cut, FittedChen, KUHN, UNSTRUCTURED_SEED,
+    cut_body, fit_line, rest_of, set_velocities, Body, Cut, FittedChen, PdMaterial, KUHN,
+    UNSTRUCTURED_SEED,
 };
 use crate::table::Table;
 use crate::{BenchError, Effort};
@@ -55,13 +56,41 @@ fn tension(
     nu: f64,
     cut: Cut,
 ) -> Result<(f64, f64, Run, f64), BenchError> {
+    let case = format!("tension PD {nx}x{n}x{n} k={k} nu={nu}", n = (nx / 4).max(1));
+    let m = material(&case, nu)?;
+    let (e, nu, run, delta, _) = if fitted {
+        tension_of(nx, k, &FittedChen(m), nu, cut)?
+    } else {
+        tension_of(nx, k, &m, nu, cut)?
+    };
+    Ok((e, nu, run, delta))
+}
+
+/// [`tension`] for any material (`nu` its Poisson's ratio, for the starting guess), with what
+/// the build of the model's ghosts found, when it has them.
+pub(crate) fn tension_of<T: PdMaterial>(
+    nx: usize,
+    k: f64,
+    material: &T,
+    nu: f64,
+    cut: Cut,
+) -> Result<(f64, f64, Run, f64, Option<GhostReport>), BenchError> {
     let started = Instant::now();
     let len = 0.4;
     let n = (nx / 4).max(1);
     let case = format!("tension PD {nx}x{n}x{n} k={k} nu={nu}");
-    let b = bar(&case, len, nx, 4, k, fitted, nu, cut)?;
+    let b = cut_body(
+        &case,
+        [0.0; 3],
+        [len, SIDE, SIDE],
+        [nx, n, n],
+        k,
+        material,
+        cut,
+    )?;
     let delta = b.horizon();
     let bonds = b.bonds();
+    let ghosts = T::ghosts(&b.model);
     let left = b.select(|x| x[0] < delta);
     let right = b.select(|x| x[0] > len - delta);
     let omega1 = std::f64::consts::PI * (YOUNG / DENSITY).sqrt() / len;
@@ -108,7 +137,7 @@ fn tension(
     let reaction: f64 = right.iter().map(|&i| s.forces()[i as usize][0]).sum();
     let stress = -reaction / (SIDE * SIDE);
     let run = Run::peridynamics([nx, n, n], k, started, steps, bonds);
-    Ok((stress / exx / YOUNG, -eyy / exx, run, delta))
+    Ok((stress / exx / YOUNG, -eyy / exx, run, delta, ghosts))
 }
 
 /// The moduli case: E and nu from uniaxial tension over the sweep.

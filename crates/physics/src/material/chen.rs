@@ -375,10 +375,41 @@ impl ChenModel {
         materials: &[ChenMaterial],
         options: ChenOptions,
     ) -> Result<Self, PhysicsError> {
+        let n = disc.len();
+        Self::with_passive(disc, materials, options, n)
+    }
+
+    /// As [`ChenModel::with_options`], with the particles from `active` on passive: they store
+    /// no energy (`a_i = b_i = 0`) and carry no force state of their own, but sit in their
+    /// neighbours' families, which read their positions (the ghosts of [`crate::ghost`]). The
+    /// correction's spread is over the active particles. Passive particles are refused with a
+    /// plastic or fracturing material (their bonds would need the history of the real ones).
+    pub fn with_passive(
+        disc: Discretization,
+        materials: &[ChenMaterial],
+        options: ChenOptions,
+        active: usize,
+    ) -> Result<Self, PhysicsError> {
         for (m, mat) in materials.iter().enumerate() {
             mat.validate(m)?;
         }
         let n = disc.len();
+        if active > n {
+            return Err(PhysicsError::BadSetting(format!(
+                "{active} active particles asked of {n}"
+            )));
+        }
+        if active < n
+            && materials
+                .iter()
+                .any(|m| m.plasticity.is_some() || m.fractures())
+        {
+            return Err(PhysicsError::BadSetting(
+                "ghost particles are built for elastic materials only: a plastic or \
+                 fracturing material has no ghosts yet"
+                    .into(),
+            ));
+        }
         disc.check_material_ids(materials.len())?;
         let delta = disc.horizon();
         let mat = |i: usize| &materials[disc.materials()[i] as usize];
@@ -410,10 +441,14 @@ impl ChenModel {
         // a_i = kappa c_i / 2 (= 9 kappa / (8 pi delta^4) uncalibrated): the energy density
         // a theta^2 / c_i is then exactly kappa (3 eps)^2 / 2 under a uniform dilatation
         let coef_a = (0..n)
-            .map(|i| mat(i).bulk_modulus * c_theta[i] / 2.0)
+            .map(|i| match i < active {
+                true => mat(i).bulk_modulus * c_theta[i] / 2.0,
+                false => 0.0,
+            })
             .collect();
         let coef_b: Vec<f64> = (0..n)
             .map(|i| match moments[i].1 {
+                _ if i >= active => 0.0,
                 m2 if options.calibrated && m2 > 0.0 => 15.0 * mat(i).shear_modulus / (2.0 * m2),
                 _ => 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5)),
             })
@@ -463,9 +498,9 @@ impl ChenModel {
         // MODEL.md's (`c_i / c0` times the fit's), and `b_i / b0`
         let m0 = PI * delta.powi(5);
         let correction = Correction {
-            dilatation: Spread::of((0..n).map(|i| worst[i] * c_theta[i] / c0).collect()),
+            dilatation: Spread::of((0..active).map(|i| worst[i] * c_theta[i] / c0).collect()),
             deviatoric: Spread::of(
-                (0..n)
+                (0..active)
                     .map(|i| match moments[i].1 {
                         m2 if options.calibrated && m2 > 0.0 => m0 / m2,
                         _ => 1.0,

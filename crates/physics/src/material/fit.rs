@@ -51,11 +51,14 @@ fn rest_direction(fam: &Family, x: &[Vec3], i: usize, k: usize) -> Vec3 {
     sub(x[j], x[i]).map(|c| c / r)
 }
 
-/// Solves `a x = b` for a symmetric positive definite 6 x 6 `a` by Cholesky; `None` when a
+/// Solves `a x = b` for a symmetric positive definite `N x N` `a` by Cholesky; `None` when a
 /// pivot is not positive.
 #[inline]
-fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
-    for c in 0..6 {
+pub(crate) fn cholesky_solve<const N: usize>(
+    mut a: [[f64; N]; N],
+    mut b: [f64; N],
+) -> Option<[f64; N]> {
+    for c in 0..N {
         let mut d = a[c][c];
         for k in 0..c {
             d -= a[c][k] * a[c][k];
@@ -65,7 +68,7 @@ fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
         }
         let d = d.sqrt();
         a[c][c] = d;
-        for r in c + 1..6 {
+        for r in c + 1..N {
             let mut s = a[r][c];
             for k in 0..c {
                 s -= a[r][k] * a[c][k];
@@ -73,14 +76,14 @@ fn cholesky_solve(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Option<[f64; 6]> {
             a[r][c] = s / d;
         }
     }
-    for r in 0..6 {
+    for r in 0..N {
         for k in 0..r {
             b[r] -= a[r][k] * b[k];
         }
         b[r] /= a[r][r];
     }
-    for r in (0..6).rev() {
-        for k in r + 1..6 {
+    for r in (0..N).rev() {
+        for k in r + 1..N {
             b[r] -= a[k][r] * b[k];
         }
         b[r] /= a[r][r];

@@ -2,7 +2,7 @@
 
 pub mod basis;
 pub mod chen;
-mod fit;
+pub(crate) mod fit;
 mod guard;
 pub(crate) mod kernel;
 pub(crate) mod lanes;

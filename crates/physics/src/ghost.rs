@@ -1,0 +1,687 @@
+//! Ghost particles across a body's flat faces (issue 18; docs/DECISIONS.md, "Ghost particles
+//! across the faces"): the families a face cuts are completed by mirror images of the particles
+//! within a horizon of it, whose displacements are fixed linear combinations of real ones.
+//!
+//! A free face's ghost `g`, the image of particle `p`, moves as `u_p + F_p (X_g - X_p)` (with
+//! [`GhostFit::Quadratic`] the fit's second-order terms as well), `F_p` the least-squares
+//! gradient of the displacement over `p`'s real family (weights `omega V_j`,
+//! `omega = delta / r`). A clamped face's ghost moves as minus its source (the odd image: zero
+//! displacement on the face, to first order). Either way `y_g = s_g + sum_k c_gk y_k` over real
+//! particles `k`: an affine map of the real positions, so the energy stays a function of the
+//! real particles, the force on real `k` gains `c_gk f_g` from each ghost that reads it (the
+//! transpose of the map, gathered per real particle, so no atomics), and a free face's ghosts,
+//! exact for every affine field, keep the energy objective.
+//!
+//! The ghosts join the families of the real particles within a horizon of them as passive
+//! particles appended after the real ones ([`crate::ChenModel::with_passive`]): they store no
+//! energy and carry no force state, so the model's loops run unchanged over the extended
+//! families, and [`Ghosted`] shows the integrators the real particles only.
+
+use std::collections::HashMap;
+
+use perifrac_checkpoint::{expect_count, CheckpointError, Reader, Writer};
+use rayon::prelude::*;
+
+use crate::error::PhysicsError;
+use crate::family::Family;
+use crate::fracture::Damage;
+use crate::material::fit::cholesky_solve;
+use crate::material::{ChenMaterial, ChenModel, ChenOptions, ForceModel, Spread};
+use crate::math::{axpy, dot, norm, norm_squared, scale, sub, Vec3};
+use crate::par::GRAIN;
+use crate::particles::Discretization;
+
+/// How a face treats what lies beyond it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaceKind {
+    /// A free face: its ghosts continue the displacement fitted over their source's family.
+    Free,
+    /// A clamped face: its ghosts move as minus their source, so the displacement vanishes on
+    /// the face (to first order); images of the free faces' ghosts near it included.
+    Clamped,
+}
+
+/// A flat face of the body: a point on it (m), its outward normal (any length) and its kind.
+/// The plane is taken as unbounded: every particle within a horizon inside it is mirrored, so
+/// the faces given must bound the body where it lies within a horizon of them (a box's faces).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GhostPlane {
+    /// A point on the face (m).
+    pub point: Vec3,
+    /// The outward normal (non-zero; normalised on use).
+    pub normal: Vec3,
+    /// Free or clamped.
+    pub kind: FaceKind,
+}
+
+impl GhostPlane {
+    /// The six faces of the axis-aligned box `[min, max]` (m), all free, in the order -x, +x,
+    /// -y, +y, -z, +z.
+    pub fn box_faces(min: Vec3, max: Vec3) -> [GhostPlane; 6] {
+        std::array::from_fn(|f| {
+            let (axis, high) = (f / 2, f % 2 == 1);
+            let mut point = min;
+            let mut normal = [0.0; 3];
+            if high {
+                point = max;
+            }
+            normal[axis] = if high { 1.0 } else { -1.0 };
+            GhostPlane {
+                point,
+                normal,
+                kind: FaceKind::Free,
+            }
+        })
+    }
+}
+
+/// The field a free face's ghost extrapolates from its source's family.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GhostFit {
+    /// The least-squares gradient: exact for affine fields.
+    Affine,
+    /// Gradient and second derivatives: exact for quadratic fields (bending near a face), at a
+    /// larger gain (docs/DECISIONS.md: a stable step 0.57 times the fitted default's on the
+    /// 40 x 4 x 4 bar). A source whose family cannot fit it falls back to the affine fit.
+    Quadratic,
+}
+
+/// What a ghost layer's build found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GhostReport {
+    /// Ghosts kept.
+    pub ghosts: usize,
+    /// Directed bonds between real particles and ghosts (each pair once a direction).
+    pub bonds: usize,
+    /// Images dropped because no real particle lies within a horizon of them.
+    pub unbonded: usize,
+    /// Images dropped because their source's family cannot fit even a gradient.
+    pub unfitted: usize,
+    /// Free ghosts whose source fell back from the quadratic fit to the affine one.
+    pub affine_fallbacks: usize,
+    /// Each ghost's gain, the sum of its combination's coefficients' magnitudes (1 for a copy
+    /// of its source): how much it amplifies what it reads.
+    pub gain: Spread,
+}
+
+/// Ghosts of a discretisation across the given faces: their combinations, the fold of their
+/// forces back onto the real particles, and the extended discretisation (real particles first,
+/// then the ghosts) a model runs over.
+#[derive(Debug, Clone)]
+pub struct GhostLayer {
+    real: usize,
+    /// Per ghost, the constant `s_g` of its position's map (m).
+    shift: Vec<Vec3>,
+    /// Per ghost, its terms `(k, c_gk)` over real particles (CSR).
+    combo_offsets: Vec<u32>,
+    combo: Vec<(u32, f64)>,
+    /// Per real particle, the ghosts that read it, `(g, c_gk)` by ghost (CSR).
+    fold_offsets: Vec<u32>,
+    fold: Vec<(u32, f64)>,
+    extended: Discretization,
+    report: GhostReport,
+}
+
+/// Number of basis terms of the quadratic fit: `x, y, z, x^2/2, y^2/2, z^2/2, xy, xz, yz`.
+const TERMS: usize = 9;
+
+/// The fit's basis terms of an offset `d` over the horizon (dimensionless); the quadratic
+/// terms are zero for an affine fit.
+fn basis(d: Vec3, delta: f64, fit: GhostFit) -> [f64; TERMS] {
+    let [x, y, z] = d.map(|c| c / delta);
+    match fit {
+        GhostFit::Affine => [x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        GhostFit::Quadratic => [
+            x,
+            y,
+            z,
+            x * x / 2.0,
+            y * y / 2.0,
+            z * z / 2.0,
+            x * y,
+            x * z,
+            y * z,
+        ],
+    }
+}
+
+/// The coefficients `(k, c)` of the ghost at `at` (m) from source `p`: `u_p` plus the fitted
+/// field's change from `X_p` to `at`, the fit over `p`'s real family. `None` when the family's
+/// moment is singular for `fit`.
+fn fitted_terms(
+    disc: &Discretization,
+    p: usize,
+    at: Vec3,
+    fit: GhostFit,
+) -> Option<Vec<(u32, f64)>> {
+    let (fam, x, vol) = (disc.family(), disc.rest_positions(), disc.volumes());
+    let delta = disc.horizon();
+    let used = match fit {
+        GhostFit::Affine => 3,
+        GhostFit::Quadratic => TERMS,
+    };
+    let mut m = [[0.0; TERMS]; TERMS];
+    for k in fam.range(p) {
+        let j = fam.neighbours()[k] as usize;
+        let w = delta / fam.rest_lengths()[k] * vol[j];
+        let phi = basis(sub(x[j], x[p]), delta, fit);
+        for a in 0..used {
+            for b in 0..used {
+                m[a][b] += w * phi[a] * phi[b];
+            }
+        }
+    }
+    // unused terms decouple: identity rows solve to zero
+    for (a, row) in m.iter_mut().enumerate().skip(used) {
+        row[a] = 1.0;
+    }
+    let k = cholesky_solve(m, basis(sub(at, x[p]), delta, fit))?;
+    let mut terms = Vec::with_capacity(fam.range(p).len() + 1);
+    let mut own = 1.0;
+    for b in fam.range(p) {
+        let j = fam.neighbours()[b] as usize;
+        let w = delta / fam.rest_lengths()[b] * vol[j];
+        let phi = basis(sub(x[j], x[p]), delta, fit);
+        let c = w * phi.iter().zip(&k).map(|(a, b)| a * b).sum::<f64>();
+        own -= c;
+        terms.push((j as u32, c));
+    }
+    terms.push((p as u32, own));
+    terms.sort_unstable_by_key(|t| t.0);
+    terms.iter().all(|t| t.1.is_finite()).then_some(terms)
+}
+
+/// `s + sum c y_k` over `terms`, in their order (the same arithmetic at rest and in motion,
+/// so a ghost sits at its rest position bit for bit when the real particles do).
+#[inline]
+fn combine(shift: Vec3, terms: &[(u32, f64)], y: &[Vec3]) -> Vec3 {
+    terms
+        .iter()
+        .fold(shift, |s, &(k, c)| axpy(s, c, y[k as usize]))
+}
+
+/// A plane with its normal made unit.
+fn unit_plane(i: usize, p: &GhostPlane) -> Result<(Vec3, Vec3, FaceKind), PhysicsError> {
+    let len = norm(p.normal);
+    if !(len.is_finite() && len > 0.0 && p.point.iter().all(|c| c.is_finite())) {
+        return Err(PhysicsError::BadSetting(format!(
+            "ghost plane {i}: point {:?} and normal {:?} must be finite, the normal non-zero",
+            p.point, p.normal
+        )));
+    }
+    Ok((p.point, scale(p.normal, 1.0 / len), p.kind))
+}
+
+/// Depth of `x` inside the plane `(point, unit normal)` (m; negative outside).
+#[inline]
+fn depth(plane: &(Vec3, Vec3, FaceKind), x: Vec3) -> f64 {
+    dot(sub(plane.0, x), plane.1)
+}
+
+/// `x` mirrored across the plane.
+#[inline]
+fn mirror(plane: &(Vec3, Vec3, FaceKind), x: Vec3) -> Vec3 {
+    axpy(x, 2.0 * depth(plane, x), plane.1)
+}
+
+/// A ghost's terms `(k, c_gk)` over real particles.
+type Terms = Vec<(u32, f64)>;
+
+/// A ghost before its bonds are found.
+struct Image {
+    /// Position (m) as the mirror puts it.
+    at: Vec3,
+    /// Real particle whose volume and material it takes.
+    source: u32,
+    shift: Vec3,
+    terms: Vec<(u32, f64)>,
+}
+
+impl GhostLayer {
+    /// Mirrors the particles of `disc` across `planes`: each particle within a horizon inside
+    /// a free face (up to three at once: a box's edges and corners get the images across
+    /// both or all three faces), then every real particle or free ghost within a horizon
+    /// inside a clamped face. Images without a real particle within a horizon are dropped.
+    pub fn build(
+        disc: &Discretization,
+        planes: &[GhostPlane],
+        fit: GhostFit,
+    ) -> Result<GhostLayer, PhysicsError> {
+        let n = disc.len();
+        let delta = disc.horizon();
+        let x = disc.rest_positions();
+        let planes = planes
+            .iter()
+            .enumerate()
+            .map(|(i, p)| unit_plane(i, p))
+            .collect::<Result<Vec<_>, _>>()?;
+        let (free, clamped): (Vec<_>, Vec<_>) = planes.iter().partition(|p| p.2 == FaceKind::Free);
+        let inside = |p: &(Vec3, Vec3, FaceKind), x: Vec3| {
+            let d = depth(p, x);
+            d > 0.0 && d < delta
+        };
+        // free images: every non-empty set of up to three near faces, mirrored in turn
+        let sets: Vec<(u32, Vec3)> = (0..n)
+            .into_par_iter()
+            .flat_map_iter(|i| {
+                let near: Vec<_> = free.iter().filter(|p| inside(p, x[i])).collect();
+                let sets = (1u32..1 << near.len()).filter(|s| s.count_ones() <= 3);
+                let near = &near;
+                sets.map(move |set| {
+                    let at = (0..near.len())
+                        .filter(|b| set & (1 << b) != 0)
+                        .fold(x[i], |at, b| mirror(near[b], at));
+                    (i as u32, at)
+                })
+                .collect::<Vec<_>>()
+            })
+            .collect();
+        let fitted: Vec<Option<(Terms, bool)>> = sets
+            .par_iter()
+            .map(|&(p, at)| {
+                let p = p as usize;
+                match fitted_terms(disc, p, at, fit) {
+                    Some(t) => Some((t, false)),
+                    None if fit == GhostFit::Quadratic => {
+                        fitted_terms(disc, p, at, GhostFit::Affine).map(|t| (t, true))
+                    }
+                    None => None,
+                }
+            })
+            .collect();
+        let (mut unfitted, mut affine_fallbacks) = (0, 0);
+        let mut images = Vec::with_capacity(sets.len());
+        for (&(source, at), f) in sets.iter().zip(fitted) {
+            let Some((terms, fell_back)) = f else {
+                unfitted += 1;
+                continue;
+            };
+            affine_fallbacks += usize::from(fell_back);
+            // s = X_g - sum c X_k: zero to round-off for an exact fit, kept so that the rest
+            // position is the one the map gives
+            let shift = sub(at, combine([0.0; 3], &terms, x));
+            images.push(Image {
+                at,
+                source,
+                shift,
+                terms,
+            });
+        }
+        // clamped faces: real particles and free ghosts within a horizon, each moving as
+        // minus its source: y_g = X_g + X_s - y_s
+        let mut clamp_images = Vec::new();
+        for plane in &clamped {
+            for (i, &xi) in x.iter().enumerate() {
+                if inside(plane, xi) {
+                    let at = mirror(plane, xi);
+                    clamp_images.push(Image {
+                        at,
+                        source: i as u32,
+                        shift: [at[0] + xi[0], at[1] + xi[1], at[2] + xi[2]],
+                        terms: vec![(i as u32, -1.0)],
+                    });
+                }
+            }
+            for g in &images {
+                if inside(plane, g.at) {
+                    let at = mirror(plane, g.at);
+                    let s = sub(g.at, g.shift);
+                    clamp_images.push(Image {
+                        at,
+                        source: g.source,
+                        shift: [at[0] + s[0], at[1] + s[1], at[2] + s[2]],
+                        terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
+                    });
+                }
+            }
+        }
+        images.extend(clamp_images);
+        Self::bond(disc, images, unfitted, affine_fallbacks)
+    }
+
+    /// Finds each image's real neighbours, drops the unbonded, and builds the layer.
+    fn bond(
+        disc: &Discretization,
+        images: Vec<Image>,
+        unfitted: usize,
+        affine_fallbacks: usize,
+    ) -> Result<GhostLayer, PhysicsError> {
+        let n = disc.len();
+        let delta = disc.horizon();
+        let x = disc.rest_positions();
+        let cell = |p: Vec3| p.map(|c| (c / delta).floor() as i64);
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        for (i, &p) in x.iter().enumerate() {
+            grid.entry(cell(p)).or_default().push(i as u32);
+        }
+        let h2 = delta * delta;
+        // each image's rest position as its map gives it, and its real neighbours, sorted
+        let found: Vec<(Vec3, Vec<u32>)> = images
+            .par_iter()
+            .map(|g| {
+                let at = combine(g.shift, &g.terms, x);
+                let c = cell(at);
+                let mut near = Vec::new();
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            if let Some(v) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
+                                near.extend(
+                                    v.iter()
+                                        .filter(|&&j| norm_squared(sub(x[j as usize], at)) < h2),
+                                );
+                            }
+                        }
+                    }
+                }
+                near.sort_unstable();
+                (at, near)
+            })
+            .collect();
+        let unbonded = found.iter().filter(|f| f.1.is_empty()).count();
+        let kept: Vec<usize> = (0..images.len())
+            .filter(|&g| !found[g].1.is_empty())
+            .collect();
+        let m = kept.len();
+        // per real particle, the ghosts in its family (ascending)
+        let mut ghost_rows = vec![Vec::new(); n];
+        for (g, &im) in kept.iter().enumerate() {
+            for &j in &found[im].1 {
+                ghost_rows[j as usize].push((n + g) as u32);
+            }
+        }
+        let fam = disc.family();
+        let bonds = 2 * kept.iter().map(|&im| found[im].1.len()).sum::<usize>();
+        let total = fam.num_bonds() + bonds;
+        if total > u32::MAX as usize || n + m > u32::MAX as usize {
+            return Err(PhysicsError::TooManyBonds(total));
+        }
+        let mut offsets = Vec::with_capacity(n + m + 1);
+        let mut neighbours = Vec::with_capacity(total);
+        offsets.push(0u32);
+        for (i, extra) in ghost_rows.iter().enumerate() {
+            neighbours.extend_from_slice(fam.row(i));
+            neighbours.extend_from_slice(extra);
+            offsets.push(neighbours.len() as u32);
+        }
+        for &im in &kept {
+            neighbours.extend_from_slice(&found[im].1);
+            offsets.push(neighbours.len() as u32);
+        }
+        let mut rest = x.to_vec();
+        rest.extend(kept.iter().map(|&im| found[im].0));
+        let mut volumes = disc.volumes().to_vec();
+        let mut materials = disc.materials().to_vec();
+        for &im in &kept {
+            let s = images[im].source as usize;
+            volumes.push(disc.volumes()[s]);
+            materials.push(disc.materials()[s]);
+        }
+        let family = Family::from_rows(&rest, offsets, neighbours);
+        let extended = Discretization::from_parts(rest, volumes, materials, delta, family);
+        // the combinations, and their transpose by real particle
+        let mut combo_offsets = vec![0u32];
+        let mut combo = Vec::new();
+        let mut shift = Vec::with_capacity(m);
+        let mut fold_rows = vec![Vec::new(); n];
+        for (g, &im) in kept.iter().enumerate() {
+            let image = &images[im];
+            for &(k, c) in &image.terms {
+                fold_rows[k as usize].push((g as u32, c));
+            }
+            combo.extend_from_slice(&image.terms);
+            combo_offsets.push(combo.len() as u32);
+            shift.push(image.shift);
+        }
+        let mut fold_offsets = vec![0u32];
+        let mut fold = Vec::with_capacity(combo.len());
+        for row in &fold_rows {
+            fold.extend_from_slice(row);
+            fold_offsets.push(fold.len() as u32);
+        }
+        let gains = (0..m)
+            .map(|g| {
+                let r = combo_offsets[g] as usize..combo_offsets[g + 1] as usize;
+                combo[r].iter().map(|t| t.1.abs()).sum()
+            })
+            .collect();
+        let report = GhostReport {
+            ghosts: m,
+            bonds,
+            unbonded,
+            unfitted,
+            affine_fallbacks,
+            gain: Spread::of(gains),
+        };
+        Ok(GhostLayer {
+            real: n,
+            shift,
+            combo_offsets,
+            combo,
+            fold_offsets,
+            fold,
+            extended,
+            report,
+        })
+    }
+
+    /// Number of real particles.
+    pub fn num_real(&self) -> usize {
+        self.real
+    }
+
+    /// Number of ghosts.
+    pub fn num_ghosts(&self) -> usize {
+        self.shift.len()
+    }
+
+    /// The real particles, then the ghosts (rest positions, volumes and materials of their
+    /// sources), with the extended families: what the model runs over.
+    pub fn extended(&self) -> &Discretization {
+        &self.extended
+    }
+
+    /// What the build found.
+    pub fn report(&self) -> &GhostReport {
+        &self.report
+    }
+
+    /// Ghost `g`'s terms `(k, c_gk)` over real particles.
+    pub fn terms(&self, g: usize) -> &[(u32, f64)] {
+        &self.combo[self.combo_offsets[g] as usize..self.combo_offsets[g + 1] as usize]
+    }
+
+    /// Writes the real positions `y` (m) and the ghosts' positions they give into `out` (real
+    /// particles first, then the ghosts).
+    pub fn expand(&self, y: &[Vec3], out: &mut [Vec3]) {
+        let n = self.real;
+        assert_eq!(y.len(), n, "positions: one per real particle");
+        assert_eq!(
+            out.len(),
+            n + self.num_ghosts(),
+            "one slot per particle and ghost"
+        );
+        let (real, ghosts) = out.split_at_mut(n);
+        real.copy_from_slice(y);
+        ghosts
+            .par_chunks_mut(GRAIN)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                for (o, slot) in chunk.iter_mut().enumerate() {
+                    let g = c * GRAIN + o;
+                    *slot = combine(self.shift[g], self.terms(g), y);
+                }
+            });
+    }
+
+    /// The forces on the real particles from `ext`, the forces on every particle and ghost
+    /// (N): each real particle's own plus `c_gk f_g` from every ghost `g` that reads it,
+    /// gathered in ghost order.
+    pub fn fold(&self, ext: &[Vec3], forces: &mut [Vec3]) {
+        let n = self.real;
+        assert_eq!(
+            ext.len(),
+            n + self.num_ghosts(),
+            "one force per particle and ghost"
+        );
+        assert_eq!(forces.len(), n, "forces: one per real particle");
+        forces
+            .par_chunks_mut(GRAIN)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                for (o, slot) in chunk.iter_mut().enumerate() {
+                    let k = c * GRAIN + o;
+                    let r = self.fold_offsets[k] as usize..self.fold_offsets[k + 1] as usize;
+                    *slot = self.fold[r]
+                        .iter()
+                        .fold(ext[k], |f, &(g, w)| axpy(f, w, ext[n + g as usize]));
+                }
+            });
+    }
+
+    /// Heap bytes.
+    pub fn memory_bytes(&self) -> usize {
+        24 * self.shift.len()
+            + 4 * (self.combo_offsets.len() + self.fold_offsets.len())
+            + 16 * (self.combo.len() + self.fold.len())
+            + self.extended.memory_bytes()
+    }
+}
+
+/// A model over a body and its ghosts, shown to the integrators as the real particles only:
+/// positions in, the ghosts' written from them; the ghosts' forces folded back out.
+#[derive(Debug, Clone)]
+pub struct Ghosted<M> {
+    inner: M,
+    real: Discretization,
+    layer: GhostLayer,
+    /// Positions of every particle and ghost (m), the last expanded.
+    y: Vec<Vec3>,
+    /// Forces on every particle and ghost (N).
+    f: Vec<Vec3>,
+}
+
+impl<M: ForceModel> Ghosted<M> {
+    /// Wraps `inner`, a model over `layer.extended()` whose ghosts are passive, for the real
+    /// particles of `real`. Refused when the sizes differ or the model can break bonds (a
+    /// ghost's combination would read across a crack).
+    pub fn new(real: Discretization, layer: GhostLayer, inner: M) -> Result<Self, PhysicsError> {
+        let total = layer.extended().len();
+        if real.len() != layer.num_real() || inner.num_particles() != total {
+            return Err(PhysicsError::LengthMismatch {
+                what: "ghosted model particles",
+                expected: total,
+                got: inner.num_particles(),
+            });
+        }
+        if inner.damage().is_some() {
+            return Err(PhysicsError::BadSetting(
+                "ghost particles are built for models that do not break bonds".into(),
+            ));
+        }
+        Ok(Ghosted {
+            inner,
+            real,
+            layer,
+            y: vec![[0.0; 3]; total],
+            f: vec![[0.0; 3]; total],
+        })
+    }
+
+    /// The model over the particles and their ghosts.
+    pub fn inner(&self) -> &M {
+        &self.inner
+    }
+
+    /// The ghosts.
+    pub fn layer(&self) -> &GhostLayer {
+        &self.layer
+    }
+}
+
+impl Ghosted<ChenModel> {
+    /// Chen's model over `disc` with ghosts across `planes`, fitted as `fit`: the correction's
+    /// constants (`c_i`, `b_i`, the fitted dilatation) over the completed families.
+    pub fn chen(
+        disc: Discretization,
+        materials: &[ChenMaterial],
+        options: ChenOptions,
+        planes: &[GhostPlane],
+        fit: GhostFit,
+    ) -> Result<Self, PhysicsError> {
+        let layer = GhostLayer::build(&disc, planes, fit)?;
+        let n = disc.len();
+        let inner = ChenModel::with_passive(layer.extended().clone(), materials, options, n)?;
+        Ghosted::new(disc, layer, inner)
+    }
+}
+
+impl<M: ForceModel> ForceModel for Ghosted<M> {
+    fn num_particles(&self) -> usize {
+        self.real.len()
+    }
+
+    fn discretization(&self) -> &Discretization {
+        &self.real
+    }
+
+    fn masses(&self) -> &[f64] {
+        &self.inner.masses()[..self.real.len()]
+    }
+
+    fn update_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.layer.expand(y, &mut self.y);
+        self.inner.update_forces(&self.y, &mut self.f);
+        self.layer.fold(&self.f, forces);
+    }
+
+    fn trial_forces(&mut self, y: &[Vec3], forces: &mut [Vec3]) {
+        self.layer.expand(y, &mut self.y);
+        self.inner.trial_forces(&self.y, &mut self.f);
+        self.layer.fold(&self.f, forces);
+    }
+
+    fn forces_vanish_at(&self, y: &[Vec3]) -> bool {
+        // at the real rest positions the ghosts are at theirs bit for bit (`combine`)
+        y == self.real.rest_positions()
+            && self
+                .inner
+                .forces_vanish_at(self.inner.discretization().rest_positions())
+    }
+
+    fn elastic_energy(&mut self, y: &[Vec3]) -> f64 {
+        self.layer.expand(y, &mut self.y);
+        self.inner.elastic_energy(&self.y)
+    }
+
+    fn break_bonds(&mut self, _y: &[Vec3], _broken: &mut Vec<(u32, u32)>) {
+        // `new` refuses models that break bonds
+    }
+
+    fn silling_askari_step(&self) -> f64 {
+        self.inner.silling_askari_step()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.inner.memory_bytes()
+            + self.real.memory_bytes()
+            + self.layer.memory_bytes()
+            + 24 * (self.y.len() + self.f.len())
+    }
+
+    fn damage(&self) -> Option<&Damage> {
+        None
+    }
+
+    fn save_state(&self, w: &mut Writer) {
+        w.tag("ghosts");
+        w.usize(self.layer.num_ghosts());
+        self.inner.save_state(w);
+    }
+
+    fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
+        r.tag("ghosts")?;
+        expect_count("ghosts", self.layer.num_ghosts(), r.usize("ghosts")?)?;
+        self.inner.restore_state(r)
+    }
+}

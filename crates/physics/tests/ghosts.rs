@@ -1,0 +1,265 @@
+//! Ghost particles across a body's faces (`ghost.rs`, issue 18): the ghosts follow every
+//! affine field (and, fitted quadratically, every quadratic one); the forces stay the energy's
+//! gradient and objective; completed families store the continuum's energy under a uniform
+//! strain where the cut ones store more.
+
+mod support;
+
+use perifrac_physics::math::{mat_vec, rotation, Vec3};
+use perifrac_physics::{
+    ChenModel, ChenOptions, Discretization, FaceKind, ForceModel, GhostFit, GhostPlane, Ghosted,
+};
+use perifrac_topology::mesher::{box_cut_data, BoxCut};
+use perifrac_topology::TetMesh;
+use support::{affine, forces, gradient_mismatch, nonuniform, norm_all, steel};
+
+/// The box `[0, size]` of `cells` cells, unstructured (the bench's bars' mesh, seed 1) or
+/// on the Kuhn lattice, horizon `k` mean edges.
+fn box_disc(size: [f64; 3], cells: [usize; 3], k: f64, unstructured: bool) -> Discretization {
+    if !unstructured {
+        return support::block(size, cells, k).0;
+    }
+    let (v, t) = box_cut_data([0.0; 3], size, cells, BoxCut::Unstructured(1)).expect("mesh");
+    let (mesh, _) = TetMesh::new(v, t).expect("box mesh");
+    Discretization::from_tets(
+        &mesh.rest_barycentres(),
+        &mesh.rest_volumes(),
+        mesh.neighbours(),
+        k * mesh.mean_edge_length(),
+    )
+    .expect("discretisation")
+    .0
+}
+
+/// The six faces of the box `[0, size]`, all `kind`.
+fn faces(size: [f64; 3], kind: FaceKind) -> Vec<GhostPlane> {
+    GhostPlane::box_faces([0.0; 3], size)
+        .into_iter()
+        .map(|p| GhostPlane { kind, ..p })
+        .collect()
+}
+
+fn ghosted(disc: Discretization, planes: &[GhostPlane], fit: GhostFit) -> Ghosted<ChenModel> {
+    Ghosted::chen(disc, &[steel()], ChenOptions::default(), planes, fit).expect("ghosted model")
+}
+
+/// The largest distance of a ghost from where `field` puts it, over the largest
+/// displacement, when the real particles follow `field`.
+fn ghost_miss(m: &Ghosted<ChenModel>, field: impl Fn(Vec3) -> Vec3) -> f64 {
+    let ext = m.layer().extended().rest_positions();
+    let n = m.layer().num_real();
+    let y: Vec<Vec3> = ext[..n].iter().map(|&p| field(p)).collect();
+    let mut out = vec![[0.0; 3]; ext.len()];
+    m.layer().expand(&y, &mut out);
+    let mut miss: f64 = 0.0;
+    let mut size: f64 = 0.0;
+    for (g, &p) in ext.iter().enumerate() {
+        let want = field(p);
+        let d = (0..3).map(|a| (out[g][a] - want[a]).powi(2)).sum::<f64>();
+        let u = (0..3).map(|a| (want[a] - p[a]).powi(2)).sum::<f64>();
+        miss = miss.max(d.sqrt());
+        size = size.max(u.sqrt());
+    }
+    miss / size
+}
+
+#[test]
+fn ghosts_follow_affine_fields_and_quadratic_ones_when_fitted_so() {
+    let size = [0.06, 0.05, 0.04];
+    let f = [
+        [1.01, 0.02, -0.01],
+        [0.005, 0.99, 0.03],
+        [-0.02, 0.01, 1.02],
+    ];
+    let quad = |p: Vec3| {
+        let a = affine(&[p], &f, [1e-3, 0.0, -2e-3])[0];
+        [
+            a[0] + 3.0 * p[1] * p[2],
+            a[1] - 2.0 * p[0] * p[0],
+            a[2] + p[1] * p[1],
+        ]
+    };
+    let lin = |p: Vec3| affine(&[p], &f, [1e-3, 0.0, -2e-3])[0];
+    for unstructured in [false, true] {
+        let disc = box_disc(size, [6, 5, 4], 1.5, unstructured);
+        let a = ghosted(disc.clone(), &faces(size, FaceKind::Free), GhostFit::Affine);
+        let q = ghosted(disc, &faces(size, FaceKind::Free), GhostFit::Quadratic);
+        let r = q.layer().report().clone();
+        eprintln!(
+            "unstructured {unstructured}: affine {:?}",
+            a.layer().report()
+        );
+        eprintln!("unstructured {unstructured}: quadratic {r:?}");
+        let (al, ql, qq) = (
+            ghost_miss(&a, lin),
+            ghost_miss(&q, lin),
+            ghost_miss(&q, quad),
+        );
+        let aq = ghost_miss(&a, quad);
+        eprintln!(
+            "miss: affine/linear {al:e} quadratic/linear {ql:e} quadratic/quadratic {qq:e} \
+             affine/quadratic {aq:e}"
+        );
+        // every source's family here fits both: no image dropped or fallen back
+        assert_eq!((r.unfitted, r.affine_fallbacks), (0, 0));
+        // exact fits, so only the rounding of positions of ~1e-2 m against displacements of
+        // ~1e-3 m is left: measured up to 5.4e-14
+        for miss in [al, ql, qq] {
+            assert!(miss < 1e-12, "{miss}");
+        }
+        // the affine fit cannot follow a quadratic field: the check can fail
+        assert!(aq > 1e-3, "{aq}");
+        // the gains this block's images take, measured: affine largest 5.3 and 5.9, quadratic
+        // 23.1 and 24.7 (the study's 40 x 4 x 4 bar: 6.8 and 35.9); twice that is a fault
+        assert!(a.layer().report().gain.max < 12.0);
+        assert!(r.gain.max < 50.0);
+    }
+}
+
+#[test]
+fn ghosted_forces_are_the_gradient_objective_and_vanish_at_rest() {
+    let size = [0.04, 0.03, 0.03];
+    for fit in [GhostFit::Affine, GhostFit::Quadratic] {
+        let disc = box_disc(size, [4, 3, 3], 1.5, true);
+        let mut m = ghosted(disc, &faces(size, FaceKind::Free), fit);
+        let x = m.discretization().rest_positions().to_vec();
+        let rest = forces(&mut m, &x);
+        assert!(m.forces_vanish_at(&x));
+        let y = nonuniform(&x, 0.01, 0.03);
+        let f = forces(&mut m, &y);
+        let worst = gradient_mismatch(&mut m, &y, &f, 1e-7 * 0.01, 7);
+        let r = rotation([0.3, -0.5, 0.8], 0.9);
+        let yr: Vec<Vec3> = y.iter().map(|&p| mat_vec(&r, p)).collect();
+        let fr = forces(&mut m, &yr);
+        let turned: Vec<Vec3> = f.iter().map(|&p| mat_vec(&r, p)).collect();
+        let obj = support::diff_all(&fr, &turned) / norm_all(&f);
+        let xr: Vec<Vec3> = x.iter().map(|&p| mat_vec(&r, p)).collect();
+        let rigid = norm_all(&forces(&mut m, &xr)) / norm_all(&f);
+        eprintln!(
+            "{fit:?}: rest {:e} grad {worst:e} objectivity {obj:e} rigid {rigid:e}",
+            norm_all(&rest)
+        );
+        // at rest the ghosts sit at their rest positions bit for bit: no force at all
+        assert_eq!(norm_all(&rest), 0.0);
+        // central differences of step 1e-9 m, as tests/fitted.rs (measured 3.2e-9, 1.8e-9)
+        assert!(worst < 1e-5, "{worst}");
+        // rounding of rotated lengths against 1% strains, as tests/fitted.rs (measured
+        // 1.4e-13 and 1.2e-13 for both)
+        assert!(obj < 1e-9 && rigid < 1e-9, "{obj} {rigid}");
+    }
+}
+
+#[test]
+fn completed_families_store_the_continuums_energy() {
+    let size = [0.08, 0.08, 0.08];
+    let (young, nu) = (200e9, 0.25);
+    let (lam, mu) = (
+        young * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        young / (2.0 * (1.0 + nu)),
+    );
+    let e = 1e-5;
+    let strains = [
+        ("shear", [[0.0, e, 0.0], [e, 0.0, 0.0], [0.0, 0.0, 0.0]]),
+        (
+            "pull",
+            [[e, 0.0, 0.0], [0.0, -nu * e, 0.0], [0.0, 0.0, -nu * e]],
+        ),
+        (
+            "mixed",
+            [[0.0, 0.0, e], [0.0, 0.5 * e, -e], [e, -e, -0.5 * e]],
+        ),
+    ];
+    // the largest miss of the plain model on unstructured tets
+    let mut worst_plain: f64 = 0.0;
+    // the Kuhn lattice's whole families are soft in tension along its axes (docs/DECISIONS.md:
+    // 0.947 of the continuum), so its rows are printed, not held to the continuum
+    for unstructured in [false, true] {
+        let disc = box_disc(size, [8, 8, 8], 1.5, unstructured);
+        let vol: f64 = disc.volumes().iter().sum();
+        let options = ChenOptions::default();
+        let mut plain = ChenModel::with_options(disc.clone(), &[steel()], options).unwrap();
+        let mut a = ghosted(disc.clone(), &faces(size, FaceKind::Free), GhostFit::Affine);
+        let mut q = ghosted(disc, &faces(size, FaceKind::Free), GhostFit::Quadratic);
+        let x = plain.discretization().rest_positions().to_vec();
+        for (name, eps) in strains {
+            let f = [
+                [1.0 + eps[0][0], eps[0][1], eps[0][2]],
+                [eps[1][0], 1.0 + eps[1][1], eps[1][2]],
+                [eps[2][0], eps[2][1], 1.0 + eps[2][2]],
+            ];
+            let y = affine(&x, &f, [0.0; 3]);
+            let tr = eps[0][0] + eps[1][1] + eps[2][2];
+            let ee: f64 = eps.iter().flatten().map(|v| v * v).sum();
+            let w = vol * (lam * tr * tr / 2.0 + mu * ee);
+            let (p, ga, gq) = (
+                plain.elastic_energy(&y) / w,
+                a.elastic_energy(&y) / w,
+                q.elastic_energy(&y) / w,
+            );
+            eprintln!(
+                "unstructured {unstructured} {name}: plain {p:.4} affine {ga:.4} \
+                 quadratic {gq:.4}"
+            );
+            // an affine field puts both fits' ghosts in the same place
+            assert!((ga - gq).abs() < 1e-9, "{ga} {gq}");
+            if unstructured {
+                // whole families on unstructured tets store the continuum's energy (the
+                // study's interior: 1.001): measured 0.9981 to 1.0005 with ghosts, the cut
+                // families 0.9702 to 1.0340 without
+                assert!((ga - 1.0).abs() < 0.005, "{name}: {ga}");
+                worst_plain = worst_plain.max((p - 1.0).abs());
+            }
+        }
+    }
+    assert!(worst_plain > 0.02, "{worst_plain}");
+}
+
+#[test]
+fn a_clamped_face_holds_its_images_at_minus_their_sources() {
+    let size = [0.06, 0.03, 0.03];
+    let mut planes = faces(size, FaceKind::Free);
+    planes[0].kind = FaceKind::Clamped; // x = 0
+    let disc = box_disc(size, [6, 3, 3], 1.5, true);
+    let m = ghosted(disc, &planes, GhostFit::Affine);
+    // a field that vanishes on x = 0 and is linear in x is odd across it, and affine: every
+    // ghost, the clamp's images of the free faces' ghosts included, follows it exactly
+    let odd = |p: Vec3| [p[0] * 1.02, p[1] + 0.03 * p[0], p[2] - 0.01 * p[0]];
+    let miss = ghost_miss(&m, odd);
+    eprintln!("clamped: {:?}, miss {miss:e}", m.layer().report());
+    assert!(miss < 1e-12, "{miss}");
+    // a rigid shift is not odd: the clamp's images move against it
+    let shift = |p: Vec3| [p[0], p[1] + 1e-3, p[2]];
+    assert!(ghost_miss(&m, shift) > 0.5);
+}
+
+#[test]
+fn ghosts_refuse_what_they_cannot_follow() {
+    let size = [0.03, 0.03, 0.03];
+    let disc = box_disc(size, [3, 3, 3], 1.5, true);
+    let planes = faces(size, FaceKind::Free);
+    let mut brittle = steel();
+    brittle.fracture = Some(perifrac_physics::FractureParams {
+        s_crit: 1e-3,
+        alpha: 0.25,
+    });
+    let err = Ghosted::chen(
+        disc.clone(),
+        &[brittle],
+        ChenOptions::default(),
+        &planes,
+        GhostFit::Affine,
+    )
+    .expect_err("a fracturing material is refused");
+    assert!(err.to_string().contains("elastic materials only"), "{err}");
+    let mut bad = planes.clone();
+    bad[2].normal = [0.0; 3];
+    let err = Ghosted::chen(
+        disc,
+        &[steel()],
+        ChenOptions::default(),
+        &bad,
+        GhostFit::Affine,
+    )
+    .expect_err("a zero normal is refused");
+    assert!(err.to_string().contains("ghost plane 2"), "{err}");
+}
