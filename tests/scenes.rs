@@ -384,3 +384,49 @@ fn the_implicit_tear_breaks_the_sheet_and_refactors() {
     assert!(pieces >= 2, "{pieces} pieces");
     assert!(stats.factorizations > 1);
 }
+
+#[test]
+fn ghosts_are_a_scene_option_for_elastic_materials() {
+    // wall_elastic.toml at a quarter of its cells, its families completed by ghost particles
+    // across the slab's boundary (`correction = "ghosts"`, quadratic by default)
+    let mut scene = load("wall_elastic.toml");
+    scene.file.mesh.cells = Some([12, 12, 2]);
+    scene.file.simulation.correction = Some("ghosts".into());
+    let mut setup = Setup::new(&scene, None).unwrap();
+    let ghosts = setup.info.ghosts.clone().expect("the ghosts' report");
+    let n = setup.info.particles;
+    eprintln!("{n} particles, {ghosts:?}");
+    // a slab two cells thick: every particle is within a horizon of a face, most of two or
+    // three, so there are more ghosts than particles
+    assert!(
+        ghosts.ghosts > n,
+        "{} ghosts for {n} particles",
+        ghosts.ghosts
+    );
+    // the integrators see the real particles only
+    assert_eq!(setup.driver.solver().positions().len(), n);
+    // the correction's factors are reported over the completed families: a whole family's
+    // b_i is within a few per cent of MODEL.md's (measured median 1.0x)
+    let b = setup.info.correction.unwrap().deviatoric;
+    assert!((b.median - 1.0).abs() < 0.1, "{b:?}");
+    for _ in 0..20 {
+        setup.driver.step().unwrap();
+    }
+    let y = setup.driver.solver().positions();
+    assert!(y.iter().flatten().all(|c| c.is_finite()));
+    // refused where they are not built: a breaking material, a fit named without them
+    let mut brittle = load("wall.toml");
+    brittle.file.simulation.correction = Some("ghosts".into());
+    let Err(err) = Setup::new(&brittle, None) else {
+        panic!("a breaking material with ghosts was set up");
+    };
+    let err = err.to_string();
+    assert!(err.contains("elastic materials only"), "{err}");
+    let mut stray = load("wall_elastic.toml");
+    stray.file.simulation.ghost_fit = Some("affine".into());
+    let Err(err) = Setup::new(&stray, None) else {
+        panic!("ghost_fit without ghosts was accepted");
+    };
+    let err = err.to_string();
+    assert!(err.contains("ghost_fit"), "{err}");
+}

@@ -208,6 +208,13 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
              {:.3})",
             d.min, d.max, d.median, d.p99, b.min, b.max, b.median, b.p99
         );
+        if let Some(g) = &info.ghosts {
+            eprintln!(
+                "ghost particles across the boundary: {} ({} bonds), gain median {:.1}, 99% \
+                 under {:.1}, largest {:.1}",
+                g.ghosts, g.bonds, g.gain.median, g.gain.p99, g.gain.max
+            );
+        }
         use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};
         // b_i / b0 is a full ball's moment over the family's: how much of it a particle lost
         if b.p99 > CORRECTION_WARNING || b.max > CORRECTION_WARNING_MAX {

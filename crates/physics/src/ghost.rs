@@ -75,6 +75,31 @@ impl GhostPlane {
     }
 }
 
+/// Where a body's faces are, for [`GhostLayer::build_with`]: the faces near a point and
+/// whether a point lies inside the body. A list of planes is one ([`GhostLayer::build`]: unbounded
+/// planes, nothing inside); a mesh's boundary another (`perifrac_topology::BoundaryPlanes` gives its planes).
+pub trait GhostFaces: Sync {
+    /// Appends to `out` the faces within `horizon` (m) of the point `x` (m), nearest first
+    /// where the order matters (only the first three free ones are mirrored across).
+    fn near(&self, x: Vec3, horizon: f64, out: &mut Vec<GhostPlane>);
+
+    /// Whether `x` (m) lies inside the body: an image there is dropped.
+    fn inside(&self, x: Vec3) -> bool {
+        let _ = x;
+        false
+    }
+}
+
+/// A list of planes as [`GhostFaces`]: every one of them, unbounded, for every point
+/// ([`GhostLayer::build_with`] keeps those the point lies within a horizon inside).
+struct Planes<'a>(&'a [GhostPlane]);
+
+impl GhostFaces for Planes<'_> {
+    fn near(&self, _x: Vec3, _horizon: f64, out: &mut Vec<GhostPlane>) {
+        out.extend_from_slice(self.0);
+    }
+}
+
 /// The field a free face's ghost extrapolates from its source's family.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum GhostFit {
@@ -247,33 +272,54 @@ impl GhostLayer {
         planes: &[GhostPlane],
         fit: GhostFit,
     ) -> Result<GhostLayer, PhysicsError> {
+        for (i, p) in planes.iter().enumerate() {
+            unit_plane(i, p)?;
+        }
+        Self::build_with(disc, &Planes(planes), fit)
+    }
+
+    /// [`GhostLayer::build`] with the faces near each particle found by `faces` (a mesh's
+    /// boundary, or a list of planes): of the faces it gives for a point, those with the point
+    /// within a horizon inside are used, the first three free ones at most; images `faces`
+    /// puts inside the body are dropped. Faces with a zero or non-finite normal are skipped.
+    pub fn build_with(
+        disc: &Discretization,
+        faces: &dyn GhostFaces,
+        fit: GhostFit,
+    ) -> Result<GhostLayer, PhysicsError> {
         let n = disc.len();
         let delta = disc.horizon();
         let x = disc.rest_positions();
-        let planes = planes
-            .iter()
-            .enumerate()
-            .map(|(i, p)| unit_plane(i, p))
-            .collect::<Result<Vec<_>, _>>()?;
-        let (free, clamped): (Vec<_>, Vec<_>) = planes.iter().partition(|p| p.2 == FaceKind::Free);
-        let inside = |p: &(Vec3, Vec3, FaceKind), x: Vec3| {
-            let d = depth(p, x);
-            d > 0.0 && d < delta
+        // the faces within a horizon inside of `at`, unit normals, of `kind`
+        let near = |at: Vec3, kind: FaceKind| {
+            let mut out = Vec::new();
+            faces.near(at, delta, &mut out);
+            out.iter()
+                .enumerate()
+                .filter_map(|(i, p)| unit_plane(i, p).ok())
+                .filter(|p| {
+                    p.2 == kind && {
+                        let d = depth(p, at);
+                        d > 0.0 && d < delta
+                    }
+                })
+                .collect::<Vec<_>>()
         };
         // free images: every non-empty set of up to three near faces, mirrored in turn
         let sets: Vec<(u32, Vec3)> = (0..n)
             .into_par_iter()
             .flat_map_iter(|i| {
-                let near: Vec<_> = free.iter().filter(|p| inside(p, x[i])).collect();
-                let sets = (1u32..1 << near.len()).filter(|s| s.count_ones() <= 3);
-                let near = &near;
-                sets.map(move |set| {
-                    let at = (0..near.len())
-                        .filter(|b| set & (1 << b) != 0)
-                        .fold(x[i], |at, b| mirror(near[b], at));
-                    (i as u32, at)
-                })
-                .collect::<Vec<_>>()
+                let mut near = near(x[i], FaceKind::Free);
+                near.truncate(3);
+                (1u32..1 << near.len())
+                    .map(|set| {
+                        let at = (0..near.len())
+                            .filter(|b| set & (1 << b) != 0)
+                            .fold(x[i], |at, b| mirror(&near[b], at));
+                        (i as u32, at)
+                    })
+                    .filter(|&(_, at)| !faces.inside(at))
+                    .collect::<Vec<_>>()
             })
             .collect();
         let fitted: Vec<Option<(Terms, bool)>> = sets
@@ -310,29 +356,27 @@ impl GhostLayer {
         // clamped faces: real particles and free ghosts within a horizon, each moving as
         // minus its source: y_g = X_g + X_s - y_s
         let mut clamp_images = Vec::new();
-        for plane in &clamped {
-            for (i, &xi) in x.iter().enumerate() {
-                if inside(plane, xi) {
-                    let at = mirror(plane, xi);
-                    clamp_images.push(Image {
-                        at,
-                        source: i as u32,
-                        shift: [at[0] + xi[0], at[1] + xi[1], at[2] + xi[2]],
-                        terms: vec![(i as u32, -1.0)],
-                    });
-                }
+        for (i, &xi) in x.iter().enumerate() {
+            for plane in near(xi, FaceKind::Clamped) {
+                let at = mirror(&plane, xi);
+                clamp_images.push(Image {
+                    at,
+                    source: i as u32,
+                    shift: [at[0] + xi[0], at[1] + xi[1], at[2] + xi[2]],
+                    terms: vec![(i as u32, -1.0)],
+                });
             }
-            for g in &images {
-                if inside(plane, g.at) {
-                    let at = mirror(plane, g.at);
-                    let s = sub(g.at, g.shift);
-                    clamp_images.push(Image {
-                        at,
-                        source: g.source,
-                        shift: [at[0] + s[0], at[1] + s[1], at[2] + s[2]],
-                        terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
-                    });
-                }
+        }
+        for g in &images {
+            for plane in near(g.at, FaceKind::Clamped) {
+                let at = mirror(&plane, g.at);
+                let s = sub(g.at, g.shift);
+                clamp_images.push(Image {
+                    at,
+                    source: g.source,
+                    shift: [at[0] + s[0], at[1] + s[1], at[2] + s[2]],
+                    terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
+                });
             }
         }
         images.extend(clamp_images);
@@ -610,6 +654,17 @@ impl Ghosted<ChenModel> {
         fit: GhostFit,
     ) -> Result<Self, PhysicsError> {
         let layer = GhostLayer::build(&disc, planes, fit)?;
+        Self::chen_with_layer(disc, layer, materials, options)
+    }
+
+    /// Chen's model over `disc` with the ghosts of `layer` (built over `disc`, by
+    /// [`GhostLayer::build_with`] for faces other than planes).
+    pub fn chen_with_layer(
+        disc: Discretization,
+        layer: GhostLayer,
+        materials: &[ChenMaterial],
+        options: ChenOptions,
+    ) -> Result<Self, PhysicsError> {
         let n = disc.len();
         let inner = ChenModel::with_passive(layer.extended().clone(), materials, options, n)?;
         Ghosted::new(disc, layer, inner)

@@ -49,7 +49,7 @@ pub use environment::{Environment, External, ImplicitEnvironment, NoEnvironment}
 pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
-pub use ghost::{FaceKind, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted};
+pub use ghost::{FaceKind, GhostFaces, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted};
 pub use integrate::{
     EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,
     QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,

@@ -113,6 +113,19 @@ pub struct CorrectionJson {
     pub dilatation: SpreadJson,
     /// `b_i` over MODEL.md's, per particle.
     pub deviatoric: SpreadJson,
+    /// The ghost particles completing the families (`correction = "ghosts"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ghosts: Option<GhostsJson>,
+}
+
+/// The ghost particles of a run, in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct GhostsJson {
+    /// Ghosts kept.
+    pub count: usize,
+    /// Each ghost's gain: the sum of its combination's coefficients' magnitudes (1: a copy of
+    /// its source).
+    pub gain: SpreadJson,
 }
 
 /// Which solver ran, in `run.json`.
@@ -346,6 +359,10 @@ impl FrameWriter {
             correction: info.correction.map(|c| CorrectionJson {
                 dilatation: c.dilatation.into(),
                 deviatoric: c.deviatoric.into(),
+                ghosts: info.ghosts.as_ref().map(|g| GhostsJson {
+                    count: g.ghosts,
+                    gain: g.gain.into(),
+                }),
             }),
         };
         let mut writer = FrameWriter {

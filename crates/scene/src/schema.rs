@@ -179,9 +179,13 @@ pub struct SimulationSpec {
     /// factorisation (default 0.02).
     pub refactor_share: Option<f64>,
     /// Chen: how the constants meet the discrete family: `"fitted"` (default: the dilatation
-    /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle) or `"none"`
-    /// (MODEL.md's constants).
+    /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle), `"none"`
+    /// (MODEL.md's constants) or `"ghosts"` (the fitted correction over families completed by
+    /// ghost particles mirrored across the mesh's boundary; elastic materials only).
     pub correction: Option<String>,
+    /// Chen with `correction = "ghosts"`: how a ghost extrapolates its source's displacement,
+    /// `"quadratic"` (default) or `"affine"`.
+    pub ghost_fit: Option<String>,
     /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.
     pub influence: Option<String>,
     /// The inversion guard's factor on the rest bond stiffness (default none): springs towards

@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 mod advect;
+pub mod boundary_planes;
 mod build;
 mod crack;
 mod error;
@@ -27,6 +28,7 @@ pub mod spec;
 mod split;
 mod surface;
 
+pub use boundary_planes::BoundaryPlanes;
 pub use build::VOLUME_TOLERANCE;
 pub use error::TopologyError;
 pub use mesh::{BuildReport, TetMesh, NO_TET};

@@ -1,7 +1,8 @@
 //! Ghost particles across the bars' faces (`perifrac_physics::ghost`, issue 18), on the
 //! scenes' unstructured tets at k = 1.5: the cantilever of the `cantilever` case, held by its
 //! layer of particles or clamped by its mirror image across x = 0, and the moduli of the
-//! `moduli` case at 8 cells across. Not yet a scene option: the faces are the bars' own planes.
+//! `moduli` case at 8 cells across. The faces are the bars' own planes (a scene finds its
+//! mesh's: `correction = "ghosts"`).
 
 use perifrac_physics::{FaceKind, GhostFit, GhostPlane, GhostReport};
 

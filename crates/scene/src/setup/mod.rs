@@ -19,7 +19,7 @@ mod xu_material;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use perifrac_physics::{Correction, Discretization, EstimateMemo, PhysicsError};
+use perifrac_physics::{Correction, Discretization, EstimateMemo, GhostReport, PhysicsError};
 
 use crate::budget::{self, Limits, MeshShape, WorkEstimate};
 use crate::driver::Driver;
@@ -174,6 +174,8 @@ pub struct SetupInfo {
     /// How far Chen's constants stray from MODEL.md's (`None` for Xu's model): per particle,
     /// the largest factor on its dilatation weights and the factor on `b`.
     pub correction: Option<Correction>,
+    /// What the build of the ghost particles found (`correction = "ghosts"`).
+    pub ghosts: Option<GhostReport>,
     /// The work estimate the run was checked against: memory from the counted bonds, steps,
     /// output and wall time.
     pub estimate: WorkEstimate,
@@ -316,13 +318,13 @@ impl Setup {
         disc.set_materials(&ids).map_err(physics)?;
         times.families = stage.elapsed();
         let stage = Instant::now();
-        let mut model = solver::model(&ctx, sim, disc, &materials)?;
+        let mut model = solver::model(&ctx, sim, disc, &mesh, &materials)?;
         times.model = stage.elapsed();
-        let correction = match &model {
-            solver::AnyModel::Chen(m) => Some(m.correction()),
-            solver::AnyModel::Xu(_) => None,
-        };
-        let mut estimate = estimate.with_bonds(report.bonds as u64, extra);
+        let correction = model.correction();
+        let ghosts = model.ghosts();
+        // the ghosts' bonds to real particles walk the loops as the real ones do
+        let ghost_bonds = ghosts.as_ref().map_or(0, |g| g.bonds);
+        let mut estimate = estimate.with_bonds((report.bonds + ghost_bonds) as u64, extra);
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;
@@ -471,6 +473,7 @@ impl Setup {
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
             correction,
+            ghosts,
             estimate,
             times,
         };

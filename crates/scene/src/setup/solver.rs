@@ -1,11 +1,14 @@
 //! The force model and the integrator the scene names, built into one [`Solver`].
 
 use perifrac_physics::integrate::event_search::MAX_LEVELS;
+use perifrac_physics::math::Vec3;
 use perifrac_physics::{
-    ChenModel, ChenOptions, Discretization, EventSearchConfig, Explicit, ExplicitConfig,
-    ForceModel, Implicit, ImplicitConfig, Loads, PhysicsError, Searched, Solver, TimeStep,
-    XuKernelShape, XuModel, XuOptions,
+    ChenModel, ChenOptions, Correction, Discretization, EventSearchConfig, Explicit,
+    ExplicitConfig, FaceKind, ForceModel, GhostFaces, GhostFit, GhostLayer, GhostPlane,
+    GhostReport, Ghosted, Implicit, ImplicitConfig, Loads, PhysicsError, Searched, Solver,
+    TimeStep, XuKernelShape, XuModel, XuOptions,
 };
+use perifrac_topology::{BoundaryPlanes, TetMesh};
 
 use crate::error::SceneError;
 use crate::schema::SimulationSpec;
@@ -99,6 +102,8 @@ pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> 
 pub(super) enum AnyModel {
     /// Chen's.
     Chen(ChenModel),
+    /// Chen's over families completed by ghost particles (`correction = "ghosts"`).
+    ChenGhosts(Box<Ghosted<ChenModel>>),
     /// Xu's.
     Xu(XuModel),
 }
@@ -108,16 +113,53 @@ impl AnyModel {
     pub(super) fn as_dyn(&mut self) -> &mut dyn ForceModel {
         match self {
             AnyModel::Chen(m) => m,
+            AnyModel::ChenGhosts(m) => m.as_mut(),
             AnyModel::Xu(m) => m,
+        }
+    }
+
+    /// How Chen's constants stray from MODEL.md's (`None` for Xu's).
+    pub(super) fn correction(&self) -> Option<Correction> {
+        match self {
+            AnyModel::Chen(m) => Some(m.correction()),
+            AnyModel::ChenGhosts(m) => Some(m.inner().correction()),
+            AnyModel::Xu(_) => None,
+        }
+    }
+
+    /// What the build of the ghosts found, with ghosts.
+    pub(super) fn ghosts(&self) -> Option<GhostReport> {
+        match self {
+            AnyModel::ChenGhosts(m) => Some(m.layer().report().clone()),
+            _ => None,
         }
     }
 }
 
-/// The model of `materials` over `disc`, with the Xu options of `sim`.
+/// A mesh's boundary as the faces ghosts are mirrored across (all free).
+struct MeshFaces(BoundaryPlanes);
+
+impl GhostFaces for MeshFaces {
+    fn near(&self, x: Vec3, horizon: f64, out: &mut Vec<GhostPlane>) {
+        let planes = self.0.near(x, horizon).into_iter();
+        out.extend(planes.map(|(point, normal)| GhostPlane {
+            point,
+            normal,
+            kind: FaceKind::Free,
+        }));
+    }
+
+    fn inside(&self, x: Vec3) -> bool {
+        self.0.inside(x)
+    }
+}
+
+/// The model of `materials` over `disc` (the particles of `mesh`), with the options of `sim`.
 pub(super) fn model(
     ctx: &Ctx,
     sim: &SimulationSpec,
     disc: Discretization,
+    mesh: &TetMesh,
     materials: &Materials,
 ) -> Result<AnyModel, SceneError> {
     let physics = |cause: PhysicsError| ctx.physics(cause);
@@ -130,8 +172,15 @@ pub(super) fn model(
                 ));
             }
             let base = ChenOptions::default();
+            let ghosts = sim.correction.as_deref() == Some("ghosts");
+            if sim.ghost_fit.is_some() && !ghosts {
+                return Err(ctx.err(
+                    "simulation.ghost_fit",
+                    "is a setting of the ghost particles: add correction = \"ghosts\"",
+                ));
+            }
             let options = match sim.correction.as_deref() {
-                None | Some("fitted") => base,
+                None | Some("fitted") | Some("ghosts") => base,
                 Some("calibrated") => ChenOptions {
                     fitted_dilatation: false,
                     ..base
@@ -144,10 +193,16 @@ pub(super) fn model(
                 Some(other) => {
                     return Err(ctx.err(
                         "simulation.correction",
-                        format!("\"{other}\": expected \"fitted\", \"calibrated\" or \"none\""),
+                        format!(
+                            "\"{other}\": expected \"fitted\", \"calibrated\", \"none\" or \
+                             \"ghosts\""
+                        ),
                     ))
                 }
             };
+            if ghosts {
+                return ghosted(ctx, sim, disc, mesh, m.as_slice(), options);
+            }
             let model = ChenModel::with_options(disc, m, options).map_err(physics)?;
             let model = match sim.inversion_guard {
                 None => model,
@@ -189,6 +244,53 @@ pub(super) fn model(
             ))
         }
     }
+}
+
+/// Chen's model of `materials` over `disc` with ghosts across the boundary of `mesh`
+/// (`correction = "ghosts"`): refused for plastic and fracturing materials and with the
+/// inversion guard, which the ghosts do not carry yet.
+fn ghosted(
+    ctx: &Ctx,
+    sim: &SimulationSpec,
+    disc: Discretization,
+    mesh: &TetMesh,
+    materials: &[perifrac_physics::ChenMaterial],
+    options: ChenOptions,
+) -> Result<AnyModel, SceneError> {
+    let fit = match sim.ghost_fit.as_deref() {
+        None | Some("quadratic") => GhostFit::Quadratic,
+        Some("affine") => GhostFit::Affine,
+        Some(other) => {
+            return Err(ctx.err(
+                "simulation.ghost_fit",
+                format!("\"{other}\": expected \"quadratic\" or \"affine\""),
+            ))
+        }
+    };
+    if let Some(i) = materials
+        .iter()
+        .position(|m| m.plasticity.is_some() || m.fractures())
+    {
+        return Err(ctx.err(
+            "simulation.correction",
+            format!(
+                "\"ghosts\" completes the families of elastic materials only for now, and \
+                 material {i} yields or breaks (docs/DECISIONS.md, \"Ghost particles across \
+                 the faces\"): use \"fitted\""
+            ),
+        ));
+    }
+    if sim.inversion_guard.is_some() {
+        return Err(ctx.err(
+            "simulation.inversion_guard",
+            "is not built for ghost particles (correction = \"ghosts\")",
+        ));
+    }
+    let physics = |cause: PhysicsError| ctx.physics(cause);
+    let faces = MeshFaces(BoundaryPlanes::new(mesh, disc.horizon()));
+    let layer = GhostLayer::build_with(&disc, &faces, fit).map_err(physics)?;
+    let model = Ghosted::chen_with_layer(disc, layer, materials, options).map_err(physics)?;
+    Ok(AnyModel::ChenGhosts(Box::new(model)))
 }
 
 /// The event search's settings from `[simulation]`, each checked.
@@ -255,6 +357,9 @@ pub(super) fn build(
             AnyModel::Chen(m) => {
                 Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
             }
+            AnyModel::ChenGhosts(m) => Box::new(
+                Searched::new(*m, rest, horizon, loads, explicit, search).map_err(physics)?,
+            ),
             AnyModel::Xu(m) => {
                 Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
             }
@@ -263,6 +368,9 @@ pub(super) fn build(
     Ok(match (kind, model) {
         (Kind::Explicit, AnyModel::Chen(m)) => {
             Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
+        }
+        (Kind::Explicit, AnyModel::ChenGhosts(m)) => {
+            Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
         (Kind::Explicit, AnyModel::Xu(m)) => {
             Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
@@ -278,7 +386,7 @@ pub(super) fn build(
             };
             Box::new(Implicit::new(m, rest, loads, config).map_err(physics)?)
         }
-        (Kind::Implicit, AnyModel::Chen(_)) => {
+        (Kind::Implicit, AnyModel::Chen(_) | AnyModel::ChenGhosts(_)) => {
             return Err(ctx.err(
                 "simulation.integrator",
                 "\"implicit\" needs an energy with a rest stiffness: give the materials \

@@ -154,7 +154,7 @@ pub fn triangle_solid_angle(t: &[[f64; 3]; 3], q: [f64; 3]) -> f64 {
 }
 
 /// Closest point to `p` on triangle `t` (region tests on the barycentric coordinates).
-fn closest_on_triangle(p: [f64; 3], t: &[[f64; 3]; 3]) -> [f64; 3] {
+pub(crate) fn closest_on_triangle(p: [f64; 3], t: &[[f64; 3]; 3]) -> [f64; 3] {
     let [a, b, c] = *t;
     let ab = sub(b, a);
     let ac = sub(c, a);

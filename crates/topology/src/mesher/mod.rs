@@ -9,7 +9,7 @@
 //! Separately, [`unstructured`] meshes an axis-aligned box without a lattice: well-spaced points
 //! ([`scatter`]), their Delaunay tetrahedralisation ([`delaunay`]) and sliver removal.
 
-mod bvh;
+pub(crate) mod bvh;
 pub mod delaunay;
 pub mod fragments;
 pub mod lattice;
