@@ -406,8 +406,10 @@ fn ghosts_are_a_scene_option_for_elastic_materials() {
     // the integrators see the real particles only
     assert_eq!(setup.driver.solver().positions().len(), n);
     // the correction's factors are reported over the completed families: a whole family's
-    // b_i is within a few per cent of MODEL.md's (measured median 1.0x)
+    // b_i is MODEL.md's to the mesh's quadrature (measured median 1.005; without ghosts this
+    // slab's cut families give 2.206)
     let b = setup.info.correction.unwrap().deviatoric;
+    eprintln!("b_i / b0: {b:?}");
     assert!((b.median - 1.0).abs() < 0.1, "{b:?}");
     for _ in 0..20 {
         setup.driver.step().unwrap();

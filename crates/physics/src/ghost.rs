@@ -120,9 +120,11 @@ pub struct GhostReport {
     pub bonds: usize,
     /// Images dropped because no real particle lies within a horizon of them.
     pub unbonded: usize,
-    /// Images dropped because their source's family cannot fit even a gradient.
+    /// Images dropped because their source's family cannot fit even a gradient within
+    /// [`GHOST_GAIN_BOUND`].
     pub unfitted: usize,
-    /// Free ghosts whose source fell back from the quadratic fit to the affine one.
+    /// Free ghosts whose source fell back from the quadratic fit to the affine one (singular, or
+    /// past [`GHOST_GAIN_BOUND`]).
     pub affine_fallbacks: usize,
     /// Each ghost's gain, the sum of its combination's coefficients' magnitudes (1 for a copy
     /// of its source): how much it amplifies what it reads.
@@ -146,6 +148,14 @@ pub struct GhostLayer {
     extended: Discretization,
     report: GhostReport,
 }
+
+/// The largest gain (the sum of a ghost's coefficients' magnitudes) a fit may take: a family
+/// that barely spans the fit's terms passes the Cholesky factorisation with a round-off pivot
+/// and would give enormous coefficients (and a collapsed stable step). Past it the quadratic
+/// fit falls back to the affine one and the affine one drops the image. Every fit measured is
+/// well under it: quadratic ghosts' largest gain 41.3 on a slab two cells thick, 33.9 on the
+/// 20 x 2 x 2 bar, affine ones' 6.2 at most on the bench's bars (NaN fails the test too).
+pub const GHOST_GAIN_BOUND: f64 = 100.0;
 
 /// Number of basis terms of the quadratic fit: `x, y, z, x^2/2, y^2/2, z^2/2, xy, xz, yz`.
 const TERMS: usize = 9;
@@ -213,7 +223,8 @@ fn fitted_terms(
     }
     terms.push((p as u32, own));
     terms.sort_unstable_by_key(|t| t.0);
-    terms.iter().all(|t| t.1.is_finite()).then_some(terms)
+    let gain: f64 = terms.iter().map(|t| t.1.abs()).sum();
+    (gain <= GHOST_GAIN_BOUND).then_some(terms)
 }
 
 /// `s + sum c y_k` over `terms`, in their order (the same arithmetic at rest and in motion,
@@ -249,7 +260,25 @@ fn mirror(plane: &(Vec3, Vec3, FaceKind), x: Vec3) -> Vec3 {
     axpy(x, 2.0 * depth(plane, x), plane.1)
 }
 
-/// A ghost's terms `(k, c_gk)` over real particles.
+/// The most faces near one particle that are mirrored across (nearest first): a box's
+/// particle in a bar thinner than a horizon each way is near four.
+const MAX_NEAR_FACES: usize = 6;
+
+/// Whether two faces of the set `set` (bits over `near`) face opposite ways (normals more than
+/// 120 degrees apart): the two sides of a part thinner than a horizon, whose composed
+/// reflection is a translation across the part, not an image of a corner.
+fn opposed(near: &[(Vec3, Vec3, FaceKind)], set: u32) -> bool {
+    let member: Vec<&(Vec3, Vec3, FaceKind)> = (0..near.len())
+        .filter(|b| set & (1 << b) != 0)
+        .map(|b| &near[b])
+        .collect();
+    member
+        .iter()
+        .enumerate()
+        .any(|(a, p)| member[a + 1..].iter().any(|q| dot(p.1, q.1) < -0.5))
+}
+
+/// A ghost's terms `(k, c_gk)` over real particles (dimensionless coefficients).
 type Terms = Vec<(u32, f64)>;
 
 /// A ghost before its bonds are found.
@@ -265,7 +294,7 @@ struct Image {
 impl GhostLayer {
     /// Mirrors the particles of `disc` across `planes`: each particle within a horizon inside
     /// a free face (up to three at once: a box's edges and corners get the images across
-    /// both or all three faces), then every real particle or free ghost within a horizon
+    /// both or all three faces; never two opposite faces together), then every real particle or free ghost within a horizon
     /// inside a clamped face. Images without a real particle within a horizon are dropped.
     pub fn build(
         disc: &Discretization,
@@ -278,10 +307,13 @@ impl GhostLayer {
         Self::build_with(disc, &Planes(planes), fit)
     }
 
-    /// [`GhostLayer::build`] with the faces near each particle found by `faces` (a mesh's
-    /// boundary, or a list of planes): of the faces it gives for a point, those with the point
-    /// within a horizon inside are used, the first three free ones at most; images `faces`
-    /// puts inside the body are dropped. Faces with a zero or non-finite normal are skipped.
+    /// [`GhostLayer::build`] with the faces near each point found by `faces` (a mesh's
+    /// boundary, or a list of planes): of the faces it gives, those with the point within a
+    /// horizon inside are used (the first six at most), and the particle is mirrored across
+    /// every set of up to three of them no two of which face opposite ways (a thin part's two
+    /// sides are mirrored across one at a time). Images `faces` puts inside the body are
+    /// dropped, and so are those whose fit's gain passes [`GHOST_GAIN_BOUND`] on both fits.
+    /// Faces with a zero or non-finite normal are skipped.
     pub fn build_with(
         disc: &Discretization,
         faces: &dyn GhostFaces,
@@ -310,8 +342,11 @@ impl GhostLayer {
             .into_par_iter()
             .flat_map_iter(|i| {
                 let mut near = near(x[i], FaceKind::Free);
-                near.truncate(3);
+                // a particle near more faces than this is in a part thinner than a horizon
+                // every way; the nearest are kept
+                near.truncate(MAX_NEAR_FACES);
                 (1u32..1 << near.len())
+                    .filter(|&set| set.count_ones() <= 3 && !opposed(&near, set))
                     .map(|set| {
                         let at = (0..near.len())
                             .filter(|b| set & (1 << b) != 0)
@@ -606,14 +641,22 @@ pub struct Ghosted<M> {
 }
 
 impl<M: ForceModel> Ghosted<M> {
-    /// Wraps `inner`, a model over `layer.extended()` whose ghosts are passive, for the real
+    /// Wraps `inner`, a model over `layer.extended()` whose ghosts are passive (they must store
+    /// no energy, as [`ChenModel::with_passive`] makes them; this is not checked), for the real
     /// particles of `real`. Refused when the sizes differ or the model can break bonds (a
     /// ghost's combination would read across a crack).
     pub fn new(real: Discretization, layer: GhostLayer, inner: M) -> Result<Self, PhysicsError> {
         let total = layer.extended().len();
-        if real.len() != layer.num_real() || inner.num_particles() != total {
+        if real.len() != layer.num_real() {
             return Err(PhysicsError::LengthMismatch {
-                what: "ghosted model particles",
+                what: "real particles of the ghost layer",
+                expected: real.len(),
+                got: layer.num_real(),
+            });
+        }
+        if inner.num_particles() != total {
+            return Err(PhysicsError::LengthMismatch {
+                what: "particles and ghosts of the inner model",
                 expected: total,
                 got: inner.num_particles(),
             });

@@ -49,7 +49,9 @@ pub use environment::{Environment, External, ImplicitEnvironment, NoEnvironment}
 pub use error::PhysicsError;
 pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
-pub use ghost::{FaceKind, GhostFaces, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted};
+pub use ghost::{
+    FaceKind, GhostFaces, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted, GHOST_GAIN_BOUND,
+};
 pub use integrate::{
     EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,
     QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,

@@ -214,6 +214,12 @@ pub(super) fn model(
             Ok(AnyModel::Chen(model))
         }
         Materials::Xu(m) => {
+            if sim.ghost_fit.is_some() {
+                return Err(ctx.err(
+                    "simulation.ghost_fit",
+                    "is a setting of Chen's ghost particles (correction = \"ghosts\")",
+                ));
+            }
             if sim.correction.is_some() {
                 return Err(ctx.err(
                     "simulation.correction",
