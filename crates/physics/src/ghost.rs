@@ -27,8 +27,8 @@ use crate::family::Family;
 use crate::fracture::Damage;
 use crate::material::fit::cholesky_solve;
 use crate::material::{ChenMaterial, ChenModel, ChenOptions, ForceModel, Spread};
-use crate::math::{axpy, dot, norm, norm_squared, scale, sub, Vec3};
-use crate::par::GRAIN;
+use crate::math::{add, axpy, dot, norm, norm_squared, scale, sub, Vec3};
+use crate::par::map_particles;
 use crate::particles::Discretization;
 
 /// How a face treats what lies beyond it.
@@ -88,6 +88,12 @@ pub trait GhostFaces: Sync {
         let _ = x;
         false
     }
+
+    /// Whether [`GhostFaces::near`] can give a clamped face at all (false spares the build a
+    /// query at every free image's position).
+    fn has_clamped(&self) -> bool {
+        true
+    }
 }
 
 /// A list of planes as [`GhostFaces`]: every one of them, unbounded, for every point
@@ -97,6 +103,10 @@ struct Planes<'a>(&'a [GhostPlane]);
 impl GhostFaces for Planes<'_> {
     fn near(&self, _x: Vec3, _horizon: f64, out: &mut Vec<GhostPlane>) {
         out.extend_from_slice(self.0);
+    }
+
+    fn has_clamped(&self) -> bool {
+        self.0.iter().any(|p| p.kind == FaceKind::Clamped)
     }
 }
 
@@ -288,14 +298,15 @@ struct Image {
     /// Real particle whose volume and material it takes.
     source: u32,
     shift: Vec3,
-    terms: Vec<(u32, f64)>,
+    terms: Terms,
 }
 
 impl GhostLayer {
     /// Mirrors the particles of `disc` across `planes`: each particle within a horizon inside
     /// a free face (up to three at once: a box's edges and corners get the images across
-    /// both or all three faces; never two opposite faces together), then every real particle or free ghost within a horizon
-    /// inside a clamped face. Images without a real particle within a horizon are dropped.
+    /// both or all three faces; never two opposite faces together), then every real particle
+    /// or free ghost within a horizon inside a clamped face. Images without a real particle
+    /// within a horizon are dropped.
     pub fn build(
         disc: &Discretization,
         planes: &[GhostPlane],
@@ -322,31 +333,31 @@ impl GhostLayer {
         let n = disc.len();
         let delta = disc.horizon();
         let x = disc.rest_positions();
-        // the faces within a horizon inside of `at`, unit normals, of `kind`
-        let near = |at: Vec3, kind: FaceKind| {
+        // the faces within a horizon inside of `at`, unit normals, free and clamped apart
+        let near = |at: Vec3| {
             let mut out = Vec::new();
             faces.near(at, delta, &mut out);
             out.iter()
                 .enumerate()
                 .filter_map(|(i, p)| unit_plane(i, p).ok())
                 .filter(|p| {
-                    p.2 == kind && {
-                        let d = depth(p, at);
-                        d > 0.0 && d < delta
-                    }
+                    let d = depth(p, at);
+                    d > 0.0 && d < delta
                 })
-                .collect::<Vec<_>>()
+                .partition::<Vec<_>, _>(|p| p.2 == FaceKind::Free)
         };
+        // each real particle's near faces, asked for once
+        let mut near_real = vec![(Vec::new(), Vec::new()); n];
+        map_particles(&mut near_real, |i| near(x[i]));
         // free images: every non-empty set of up to three near faces, mirrored in turn
         let sets: Vec<(u32, Vec3)> = (0..n)
             .into_par_iter()
             .flat_map_iter(|i| {
-                let mut near = near(x[i], FaceKind::Free);
                 // a particle near more faces than this is in a part thinner than a horizon
                 // every way; the nearest are kept
-                near.truncate(MAX_NEAR_FACES);
+                let near = &near_real[i].0[..near_real[i].0.len().min(MAX_NEAR_FACES)];
                 (1u32..1 << near.len())
-                    .filter(|&set| set.count_ones() <= 3 && !opposed(&near, set))
+                    .filter(|&set| set.count_ones() <= 3 && !opposed(near, set))
                     .map(|set| {
                         let at = (0..near.len())
                             .filter(|b| set & (1 << b) != 0)
@@ -392,26 +403,28 @@ impl GhostLayer {
         // minus its source: y_g = X_g + X_s - y_s
         let mut clamp_images = Vec::new();
         for (i, &xi) in x.iter().enumerate() {
-            for plane in near(xi, FaceKind::Clamped) {
-                let at = mirror(&plane, xi);
+            for plane in &near_real[i].1 {
+                let at = mirror(plane, xi);
                 clamp_images.push(Image {
                     at,
                     source: i as u32,
-                    shift: [at[0] + xi[0], at[1] + xi[1], at[2] + xi[2]],
+                    shift: add(at, xi),
                     terms: vec![(i as u32, -1.0)],
                 });
             }
         }
-        for g in &images {
-            for plane in near(g.at, FaceKind::Clamped) {
-                let at = mirror(&plane, g.at);
-                let s = sub(g.at, g.shift);
-                clamp_images.push(Image {
-                    at,
-                    source: g.source,
-                    shift: [at[0] + s[0], at[1] + s[1], at[2] + s[2]],
-                    terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
-                });
+        // each free image asks for the clamped faces near it, unless there are none to find
+        if faces.has_clamped() {
+            for g in &images {
+                for plane in near(g.at).1 {
+                    let at = mirror(&plane, g.at);
+                    clamp_images.push(Image {
+                        at,
+                        source: g.source,
+                        shift: add(at, sub(g.at, g.shift)),
+                        terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
+                    });
+                }
             }
         }
         images.extend(clamp_images);
@@ -582,15 +595,7 @@ impl GhostLayer {
         );
         let (real, ghosts) = out.split_at_mut(n);
         real.copy_from_slice(y);
-        ghosts
-            .par_chunks_mut(GRAIN)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                for (o, slot) in chunk.iter_mut().enumerate() {
-                    let g = c * GRAIN + o;
-                    *slot = combine(self.shift[g], self.terms(g), y);
-                }
-            });
+        map_particles(ghosts, |g| combine(self.shift[g], self.terms(g), y));
     }
 
     /// The forces on the real particles from `ext`, the forces on every particle and ghost
@@ -604,18 +609,12 @@ impl GhostLayer {
             "one force per particle and ghost"
         );
         assert_eq!(forces.len(), n, "forces: one per real particle");
-        forces
-            .par_chunks_mut(GRAIN)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                for (o, slot) in chunk.iter_mut().enumerate() {
-                    let k = c * GRAIN + o;
-                    let r = self.fold_offsets[k] as usize..self.fold_offsets[k + 1] as usize;
-                    *slot = self.fold[r]
-                        .iter()
-                        .fold(ext[k], |f, &(g, w)| axpy(f, w, ext[n + g as usize]));
-                }
-            });
+        map_particles(forces, |k| {
+            let r = self.fold_offsets[k] as usize..self.fold_offsets[k + 1] as usize;
+            self.fold[r]
+                .iter()
+                .fold(ext[k], |f, &(g, w)| axpy(f, w, ext[n + g as usize]))
+        });
     }
 
     /// Heap bytes.

@@ -21,6 +21,13 @@ pub const PLANE_ANGLE: f64 = 45.0;
 /// between neighbours, a box's faces by 90.
 pub const SMOOTH_ANGLE: f64 = 60.0;
 
+/// The cell `c` and its 26 neighbours.
+fn around(c: [i64; 3]) -> impl Iterator<Item = [i64; 3]> {
+    (-1..=1).flat_map(move |dx| {
+        (-1..=1).flat_map(move |dy| (-1..=1).map(move |dz| [c[0] + dx, c[1] + dy, c[2] + dz]))
+    })
+}
+
 /// The boundary of a tet mesh at rest, bucketed for queries within a radius.
 #[derive(Debug, Clone)]
 pub struct BoundaryPlanes {
@@ -82,28 +89,18 @@ impl BoundaryPlanes {
                 let c = centre(&tris[f]);
                 let k = key(c);
                 let mut sum = [0.0; 3];
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            for &g in grid
-                                .get(&[k[0] + dx, k[1] + dy, k[2] + dz])
-                                .into_iter()
-                                .flatten()
-                            {
-                                let (t, m) = (&tris[g as usize], normals[g as usize]);
-                                // a triangle in several cells is counted once, from its own
-                                let own = key(centre(t));
-                                let home = [k[0] + dx, k[1] + dy, k[2] + dz];
-                                if own != home
-                                    || dot(m, n) <= cos
-                                    || norm(sub(centre(t), c)) > 0.5 * radius
-                                {
-                                    continue;
-                                }
-                                let w = area(t);
-                                sum = [0, 1, 2].map(|a| sum[a] + w * m[a]);
-                            }
+                for home in around(k) {
+                    for &g in grid.get(&home).into_iter().flatten() {
+                        let (t, m) = (&tris[g as usize], normals[g as usize]);
+                        // a triangle in several cells is counted once, from its own
+                        if key(centre(t)) != home
+                            || dot(m, n) <= cos
+                            || norm(sub(centre(t), c)) > 0.5 * radius
+                        {
+                            continue;
                         }
+                        let w = area(t);
+                        sum = [0, 1, 2].map(|a| sum[a] + w * m[a]);
                     }
                 }
                 let l = norm(sum);
@@ -131,19 +128,12 @@ impl BoundaryPlanes {
     pub fn near(&self, x: [f64; 3], radius: f64) -> Vec<([f64; 3], [f64; 3])> {
         let c = x.map(|v| (v / self.cell).floor() as i64);
         let mut found: Vec<(f64, u32, [f64; 3])> = Vec::new();
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    let Some(list) = self.grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) else {
-                        continue;
-                    };
-                    for &f in list {
-                        let p = closest_on_triangle(x, &self.tris[f as usize]);
-                        let d = norm(sub(p, x));
-                        if d < radius && !found.iter().any(|e| e.1 == f) {
-                            found.push((d, f, p));
-                        }
-                    }
+        for cell in around(c) {
+            for &f in self.grid.get(&cell).into_iter().flatten() {
+                let p = closest_on_triangle(x, &self.tris[f as usize]);
+                let d = norm(sub(p, x));
+                if d < radius && !found.iter().any(|e| e.1 == f) {
+                    found.push((d, f, p));
                 }
             }
         }

@@ -11,7 +11,7 @@ use super::motion::{deviation, Motion, Reference};
 use super::motion_runs::Method;
 use super::waves::tension_of;
 use super::{material, table_and_plot, CaseReport, POISSON, SIDE};
-use crate::bar::{cells_across, Cut, FittedChen, GhostedChen, UNSTRUCTURED_SEED};
+use crate::bar::{cells_across, Cut, GhostedChen, UNSTRUCTURED_SEED};
 use crate::table::Table;
 use crate::{BenchError, Effort};
 
@@ -94,16 +94,12 @@ pub fn ghosts(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
                 Fix::Ghosts(f) => f,
                 Fix::Fitted => GhostFit::Affine,
             };
-            let (mut run, _, side, report) = if clamp == Clamp::Held && fix == Fix::Fitted {
-                relax(nx, 1.5, &FittedChen(m), cut, clamp, method)?
-            } else {
-                let g = GhostedChen {
-                    material: m,
-                    planes,
-                    fit,
-                };
-                relax(nx, 1.5, &g, cut, clamp, method)?
+            let g = GhostedChen {
+                material: m,
+                planes,
+                fit,
             };
+            let (mut run, _, side, report) = relax(nx, 1.5, &g, cut, clamp, method)?;
             run.error = run.value / P2_TIP - 1.0;
             let order = match last {
                 Some((e, c)) if e != 0.0 && run.error != 0.0 => format!(

@@ -441,9 +441,12 @@ impl ChenModel {
         // a_i = kappa c_i / 2 (= 9 kappa / (8 pi delta^4) uncalibrated): the energy density
         // a theta^2 / c_i is then exactly kappa (3 eps)^2 / 2 under a uniform dilatation
         let coef_a = (0..n)
-            .map(|i| match i < active {
-                true => mat(i).bulk_modulus * c_theta[i] / 2.0,
-                false => 0.0,
+            .map(|i| {
+                if i < active {
+                    mat(i).bulk_modulus * c_theta[i] / 2.0
+                } else {
+                    0.0
+                }
             })
             .collect();
         let coef_b: Vec<f64> = (0..n)

@@ -152,6 +152,10 @@ impl GhostFaces for MeshFaces {
     fn inside(&self, x: Vec3) -> bool {
         self.0.inside(x)
     }
+
+    fn has_clamped(&self) -> bool {
+        false
+    }
 }
 
 /// The model of `materials` over `disc` (the particles of `mesh`), with the options of `sim`.
