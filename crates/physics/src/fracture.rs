@@ -83,6 +83,50 @@ impl Damage {
         Ok(())
     }
 
+    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family:
+    /// each bond with an isolated end becomes broken, and no longer counts among either end's
+    /// initial bonds, so it moves no `phi` (a ghost dropped is not damage). Idempotent; also
+    /// what restores the counts after [`Damage::restore`], which knows only the states.
+    pub(crate) fn isolate(&mut self, family: &Family, isolated: &[bool]) {
+        let nb = family.neighbours();
+        for i in 0..family.len() {
+            let mut kept = 0;
+            for k in family.range(i) {
+                if isolated[i] || isolated[nb[k] as usize] {
+                    self.state[k] = 0;
+                } else {
+                    kept += 1;
+                }
+            }
+            self.initial[i] = kept;
+            self.intact[i] = self.state[family.range(i)]
+                .iter()
+                .map(|&b| u32::from(b))
+                .sum();
+        }
+    }
+
+    /// The states of the bonds of `real` (a family whose particle `i`'s row is the first
+    /// `real.range(i).len()` bonds of `ext`'s row `i`, as a ghost layer extends it) copied
+    /// from `ext_damage` over `ext` into this damage state over `real`, the counts recounted:
+    /// `phi` over the real bonds alone.
+    pub(crate) fn copy_real(&mut self, real: &Family, ext: &Family, ext_damage: &Damage) {
+        for i in 0..real.len() {
+            let (r, e) = (real.range(i), ext.range(i).start);
+            let n = r.len();
+            self.state[r.clone()].copy_from_slice(&ext_damage.state[e..e + n]);
+            self.intact[i] = self.state[r].iter().map(|&b| u32::from(b)).sum();
+        }
+        self.overshoot = ext_damage.overshoot;
+    }
+
+    /// A damage state over `real`, all bonds intact, with the thresholds of this one's first
+    /// `real.len()` particles (see [`Damage::copy_real`]).
+    pub(crate) fn for_real(&self, real: &Family) -> Damage {
+        let n = real.len();
+        Damage::new(real, self.s_crit[..n].to_vec(), self.alpha[..n].to_vec())
+    }
+
     /// Number of intact directed bonds.
     pub fn intact_bonds(&self) -> usize {
         self.intact.iter().map(|&c| c as usize).sum()

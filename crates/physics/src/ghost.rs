@@ -15,9 +15,9 @@
 //! The ghosts join the families of the real particles within a horizon of them as passive
 //! particles appended after the real ones ([`crate::ChenModel::with_passive`]): they store no
 //! energy and carry no force state, so the model's loops run unchanged over the extended
-//! families, and [`Ghosted`] shows the integrators the real particles only.
-
-use std::collections::HashMap;
+//! families, and [`Ghosted`] shows the integrators the real particles only. Under fracture a
+//! ghost is dropped once its source's family loses a bond (docs/DECISIONS.md, "Ghosts under
+//! fracture and plasticity").
 
 use perifrac_checkpoint::{expect_count, CheckpointError, Reader, Writer};
 use rayon::prelude::*;
@@ -128,7 +128,8 @@ pub struct GhostReport {
     pub ghosts: usize,
     /// Directed bonds between real particles and ghosts (each pair once a direction).
     pub bonds: usize,
-    /// Images dropped because no real particle lies within a horizon of them.
+    /// Images dropped because no real particle lies within a horizon of them among their
+    /// source and its family.
     pub unbonded: usize,
     /// Images dropped because their source's family cannot fit even a gradient within
     /// [`GHOST_GAIN_BOUND`].
@@ -155,6 +156,9 @@ pub struct GhostLayer {
     /// Per real particle, the ghosts that read it, `(g, c_gk)` by ghost (CSR).
     fold_offsets: Vec<u32>,
     fold: Vec<(u32, f64)>,
+    /// Per real particle, the ghosts whose source it is (CSR).
+    images_offsets: Vec<u32>,
+    images_of: Vec<u32>,
     extended: Discretization,
     report: GhostReport,
 }
@@ -305,8 +309,9 @@ impl GhostLayer {
     /// Mirrors the particles of `disc` across `planes`: each particle within a horizon inside
     /// a free face (up to three at once: a box's edges and corners get the images across
     /// both or all three faces; never two opposite faces together), then every real particle
-    /// or free ghost within a horizon inside a clamped face. Images without a real particle
-    /// within a horizon are dropped.
+    /// or free ghost within a horizon inside a clamped face. A ghost bonds to the real
+    /// particles within a horizon of it among its source and the source's family (never
+    /// across a cut the families do not cross); images with none are dropped.
     pub fn build(
         disc: &Discretization,
         planes: &[GhostPlane],
@@ -441,31 +446,24 @@ impl GhostLayer {
         let n = disc.len();
         let delta = disc.horizon();
         let x = disc.rest_positions();
-        let cell = |p: Vec3| p.map(|c| (c / delta).floor() as i64);
-        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-        for (i, &p) in x.iter().enumerate() {
-            grid.entry(cell(p)).or_default().push(i as u32);
-        }
+        let fam = disc.family();
         let h2 = delta * delta;
-        // each image's rest position as its map gives it, and its real neighbours, sorted
+        // each image's rest position as its map gives it, and its real neighbours, sorted:
+        // those within a horizon of it among its source and the source's family. Across a
+        // flat face (and across orthogonal ones together) every real particle within a
+        // horizon of an image is within one of its source, so this only leaves out bonds
+        // that would cross what the families do not (a crack, a slot, a reentrant corner)
         let found: Vec<(Vec3, Vec<u32>)> = images
             .par_iter()
             .map(|g| {
                 let at = combine(g.shift, &g.terms, x);
-                let c = cell(at);
-                let mut near = Vec::new();
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            if let Some(v) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                                near.extend(
-                                    v.iter()
-                                        .filter(|&&j| norm_squared(sub(x[j as usize], at)) < h2),
-                                );
-                            }
-                        }
-                    }
-                }
+                let mut near: Vec<u32> = fam
+                    .row(g.source as usize)
+                    .iter()
+                    .copied()
+                    .chain([g.source])
+                    .filter(|&j| norm_squared(sub(x[j as usize], at)) < h2)
+                    .collect();
                 near.sort_unstable();
                 (at, near)
             })
@@ -482,7 +480,6 @@ impl GhostLayer {
                 ghost_rows[j as usize].push((n + g) as u32);
             }
         }
-        let fam = disc.family();
         let bonds = 2 * kept.iter().map(|&im| found[im].1.len()).sum::<usize>();
         let total = fam.num_bonds() + bonds;
         if total > u32::MAX as usize || n + m > u32::MAX as usize {
@@ -531,6 +528,18 @@ impl GhostLayer {
             fold.extend_from_slice(row);
             fold_offsets.push(fold.len() as u32);
         }
+        // per real particle, the ghosts it is the source of
+        let source: Vec<u32> = kept.iter().map(|&im| images[im].source).collect();
+        let mut of_source = vec![Vec::new(); n];
+        for (g, &s) in source.iter().enumerate() {
+            of_source[s as usize].push(g as u32);
+        }
+        let mut images_offsets = vec![0u32];
+        let mut images_of = Vec::with_capacity(m);
+        for row in &of_source {
+            images_of.extend_from_slice(row);
+            images_offsets.push(images_of.len() as u32);
+        }
         let gains = (0..m)
             .map(|g| {
                 let r = combo_offsets[g] as usize..combo_offsets[g + 1] as usize;
@@ -552,6 +561,8 @@ impl GhostLayer {
             combo,
             fold_offsets,
             fold,
+            images_offsets,
+            images_of,
             extended,
             report,
         })
@@ -581,6 +592,12 @@ impl GhostLayer {
     /// Ghost `g`'s terms `(k, c_gk)` over real particles.
     pub fn terms(&self, g: usize) -> &[(u32, f64)] {
         &self.combo[self.combo_offsets[g] as usize..self.combo_offsets[g + 1] as usize]
+    }
+
+    /// The ghosts whose source is real particle `k`: its images (a clamped face's images of
+    /// its free ghosts included).
+    pub fn images_of(&self, k: usize) -> &[u32] {
+        &self.images_of[self.images_offsets[k] as usize..self.images_offsets[k + 1] as usize]
     }
 
     /// Writes the real positions `y` (m) and the ghosts' positions they give into `out` (real
@@ -621,13 +638,34 @@ impl GhostLayer {
     pub fn memory_bytes(&self) -> usize {
         24 * self.shift.len()
             + 4 * (self.combo_offsets.len() + self.fold_offsets.len())
+            + 4 * (self.images_offsets.len() + self.images_of.len())
             + 16 * (self.combo.len() + self.fold.len())
             + self.extended.memory_bytes()
     }
 }
 
+/// A model whose particles a ghost layer can cut out of every family: how a ghost whose
+/// source's family broke is dropped.
+pub trait Isolate {
+    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family:
+    /// their bonds become broken without counting as damage. Idempotent.
+    fn isolate(&mut self, isolated: &[bool]);
+}
+
+impl Isolate for ChenModel {
+    fn isolate(&mut self, isolated: &[bool]) {
+        ChenModel::isolate(self, isolated)
+    }
+}
+
 /// A model over a body and its ghosts, shown to the integrators as the real particles only:
 /// positions in, the ghosts' written from them; the ghosts' forces folded back out.
+///
+/// Under fracture every bond, a ghost's too, breaks by the model's criterion, and a ghost is
+/// dropped (cut out of every family, [`Isolate`]) as soon as a bond of its source's family
+/// breaks: its combination reads that family, which then no longer moves as one piece. The
+/// damage state shown ([`ForceModel::damage`]) is over the real bonds alone, and so are the
+/// broken pairs reported.
 #[derive(Debug, Clone)]
 pub struct Ghosted<M> {
     inner: M,
@@ -637,13 +675,18 @@ pub struct Ghosted<M> {
     y: Vec<Vec3>,
     /// Forces on every particle and ghost (N).
     f: Vec<Vec3>,
+    /// The damage state of the real bonds, copied from the inner model's, when it has one.
+    damage: Option<Damage>,
+    /// Per particle and ghost, whether it is cut out of every family (real ones never).
+    dropped: Vec<bool>,
+    /// The pairs the inner model broke in the last check (extended indices).
+    broken: Vec<(u32, u32)>,
 }
 
-impl<M: ForceModel> Ghosted<M> {
+impl<M: ForceModel + Isolate> Ghosted<M> {
     /// Wraps `inner`, a model over `layer.extended()` whose ghosts are passive (they must store
     /// no energy, as [`ChenModel::with_passive`] makes them; this is not checked), for the real
-    /// particles of `real`. Refused when the sizes differ or the model can break bonds (a
-    /// ghost's combination would read across a crack).
+    /// particles of `real`. Refused when the sizes differ.
     pub fn new(real: Discretization, layer: GhostLayer, inner: M) -> Result<Self, PhysicsError> {
         let total = layer.extended().len();
         if real.len() != layer.num_real() {
@@ -660,17 +703,16 @@ impl<M: ForceModel> Ghosted<M> {
                 got: inner.num_particles(),
             });
         }
-        if inner.damage().is_some() {
-            return Err(PhysicsError::BadSetting(
-                "ghost particles are built for models that do not break bonds".into(),
-            ));
-        }
+        let damage = inner.damage().map(|d| d.for_real(real.family()));
         Ok(Ghosted {
             inner,
             real,
             layer,
             y: vec![[0.0; 3]; total],
             f: vec![[0.0; 3]; total],
+            damage,
+            dropped: vec![false; total],
+            broken: Vec::new(),
         })
     }
 
@@ -682,6 +724,47 @@ impl<M: ForceModel> Ghosted<M> {
     /// The ghosts.
     pub fn layer(&self) -> &GhostLayer {
         &self.layer
+    }
+
+    /// Number of ghosts dropped so far (their source's family broke).
+    pub fn dropped_ghosts(&self) -> usize {
+        self.dropped.iter().filter(|&&d| d).count()
+    }
+
+    /// After the inner model's check broke `self.broken`: appends the real pairs to `broken`,
+    /// drops the ghosts whose source lost a bond, and copies the real bonds' states. Returns
+    /// whether any ghost was dropped (the forces of the check's pass then read its bonds).
+    fn settle(&mut self, broken: &mut Vec<(u32, u32)>) -> bool {
+        if self.broken.is_empty() {
+            return false;
+        }
+        let n = self.real.len();
+        let mut any = false;
+        for &(i, j) in &self.broken {
+            // a ghost's bonds (j >= n) are not the mesh's
+            if (j as usize) < n {
+                broken.push((i, j));
+                for s in [i, j] {
+                    for &g in self.layer.images_of(s as usize) {
+                        let slot = &mut self.dropped[n + g as usize];
+                        any |= !*slot;
+                        *slot = true;
+                    }
+                }
+            }
+        }
+        if any {
+            self.inner.isolate(&self.dropped);
+        }
+        self.sync_damage();
+        any
+    }
+
+    /// Copies the real bonds' states from the inner model's damage.
+    fn sync_damage(&mut self) {
+        if let (Some(real), Some(ext)) = (self.damage.as_mut(), self.inner.damage()) {
+            real.copy_real(self.real.family(), self.layer.extended().family(), ext);
+        }
     }
 }
 
@@ -713,7 +796,7 @@ impl Ghosted<ChenModel> {
     }
 }
 
-impl<M: ForceModel> ForceModel for Ghosted<M> {
+impl<M: ForceModel + Isolate> ForceModel for Ghosted<M> {
     fn num_particles(&self) -> usize {
         self.real.len()
     }
@@ -751,8 +834,29 @@ impl<M: ForceModel> ForceModel for Ghosted<M> {
         self.inner.elastic_energy(&self.y)
     }
 
-    fn break_bonds(&mut self, _y: &[Vec3], _broken: &mut Vec<(u32, u32)>) {
-        // `new` refuses models that break bonds
+    fn break_bonds(&mut self, y: &[Vec3], broken: &mut Vec<(u32, u32)>) {
+        self.layer.expand(y, &mut self.y);
+        self.broken.clear();
+        self.inner.break_bonds(&self.y, &mut self.broken);
+        self.settle(broken);
+    }
+
+    fn break_bonds_and_update_forces(
+        &mut self,
+        y: &[Vec3],
+        broken: &mut Vec<(u32, u32)>,
+        forces: &mut [Vec3],
+    ) {
+        self.layer.expand(y, &mut self.y);
+        self.broken.clear();
+        self.inner
+            .break_bonds_and_update_forces(&self.y, &mut self.broken, &mut self.f);
+        if self.settle(broken) {
+            // the pass read the bonds of the ghosts just dropped: their forces again, the
+            // history as the pass left it
+            self.inner.trial_forces(&self.y, &mut self.f);
+        }
+        self.layer.fold(&self.f, forces);
     }
 
     fn silling_askari_step(&self) -> f64 {
@@ -767,18 +871,48 @@ impl<M: ForceModel> ForceModel for Ghosted<M> {
     }
 
     fn damage(&self) -> Option<&Damage> {
-        None
+        self.damage.as_ref()
+    }
+
+    fn break_overshoot(&self) -> f64 {
+        // the ghosts' bonds' too: a step that saw them go late is as late
+        self.inner.break_overshoot()
     }
 
     fn save_state(&self, w: &mut Writer) {
         w.tag("ghosts");
         w.usize(self.layer.num_ghosts());
+        let dropped: Vec<u8> = self.dropped[self.real.len()..]
+            .iter()
+            .map(|&d| u8::from(d))
+            .collect();
+        w.array(&dropped);
         self.inner.save_state(w);
     }
 
     fn restore_state(&mut self, r: &mut Reader) -> Result<(), CheckpointError> {
         r.tag("ghosts")?;
-        expect_count("ghosts", self.layer.num_ghosts(), r.usize("ghosts")?)?;
-        self.inner.restore_state(r)
+        let m = self.layer.num_ghosts();
+        expect_count("ghosts", m, r.usize("ghosts")?)?;
+        let mut dropped = vec![0u8; m];
+        r.array_into("dropped ghosts", &mut dropped)?;
+        if let Some(&b) = dropped.iter().find(|&&b| b > 1) {
+            return Err(CheckpointError::Invalid {
+                what: "dropped ghosts".into(),
+                message: format!("flag {b} is neither kept (0) nor dropped (1)"),
+            });
+        }
+        let n = self.real.len();
+        for (slot, &b) in self.dropped[n..].iter_mut().zip(&dropped) {
+            *slot = b == 1;
+        }
+        self.inner.restore_state(r)?;
+        // the inner state's bond states hold the drops; its counts need them told (and a
+        // state from before a drop the counts the drop changed)
+        if self.damage.is_some() {
+            self.inner.isolate(&self.dropped);
+        }
+        self.sync_damage();
+        Ok(())
     }
 }

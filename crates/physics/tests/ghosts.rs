@@ -24,14 +24,7 @@ fn box_disc(size: [f64; 3], cells: [usize; 3], k: f64, unstructured: bool) -> Di
     }
     let (v, t) = box_cut_data([0.0; 3], size, cells, BoxCut::Unstructured(1)).expect("mesh");
     let (mesh, _) = TetMesh::new(v, t).expect("box mesh");
-    Discretization::from_tets(
-        &mesh.rest_barycentres(),
-        &mesh.rest_volumes(),
-        mesh.neighbours(),
-        k * mesh.mean_edge_length(),
-    )
-    .expect("discretisation")
-    .0
+    support::mesh_disc(&mesh, k)
 }
 
 /// The six faces of the box `[0, size]`, all `kind`.
@@ -238,25 +231,10 @@ fn a_clamped_face_holds_its_images_at_minus_their_sources() {
 }
 
 #[test]
-fn ghosts_refuse_what_they_cannot_follow() {
+fn ghosts_refuse_a_plane_without_a_normal() {
     let size = [0.03, 0.03, 0.03];
     let disc = box_disc(size, [3, 3, 3], 1.5, true);
-    let planes = faces(size, FaceKind::Free);
-    let mut brittle = steel();
-    brittle.fracture = Some(perifrac_physics::FractureParams {
-        s_crit: 1e-3,
-        alpha: 0.25,
-    });
-    let err = Ghosted::chen(
-        disc.clone(),
-        &[brittle],
-        ChenOptions::default(),
-        &planes,
-        GhostFit::Affine,
-    )
-    .expect_err("a fracturing material is refused");
-    assert!(err.to_string().contains("elastic materials only"), "{err}");
-    let mut bad = planes.clone();
+    let mut bad = faces(size, FaceKind::Free);
     bad[2].normal = [0.0; 3];
     let err = Ghosted::chen(
         disc,
@@ -289,18 +267,6 @@ impl GhostFaces for MeshFaces {
     fn inside(&self, x: Vec3) -> bool {
         self.0.inside(x)
     }
-}
-
-/// `mesh` as particles at horizon factor 1.5, with the discretisation.
-fn mesh_disc(mesh: &TetMesh) -> Discretization {
-    Discretization::from_tets(
-        &mesh.rest_barycentres(),
-        &mesh.rest_volumes(),
-        mesh.neighbours(),
-        1.5 * mesh.mean_edge_length(),
-    )
-    .expect("discretisation")
-    .0
 }
 
 /// The energy of `m` under the uniform strain `eps` (symmetric, small) over the continuum's.
@@ -336,7 +302,7 @@ fn a_meshs_boundary_gives_the_boxs_planes_and_a_spheres_tangent_planes() {
     let size = [0.06, 0.05, 0.04];
     let (v, t) = box_cut_data([0.0; 3], size, [6, 5, 4], BoxCut::Unstructured(1)).unwrap();
     let (mesh, _) = TetMesh::new(v, t).unwrap();
-    let disc = mesh_disc(&mesh);
+    let disc = support::mesh_disc(&mesh, 1.5);
     let boundary = MeshFaces(BoundaryPlanes::new(&mesh, disc.horizon()));
     let from_mesh = GhostLayer::build_with(&disc, &boundary, GhostFit::Affine).unwrap();
     let from_planes =
@@ -362,7 +328,7 @@ fn a_meshs_boundary_gives_the_boxs_planes_and_a_spheres_tangent_planes() {
     };
     let out = mesh_surface(&sv, &sf, &opts).unwrap();
     let (mesh, _) = TetMesh::new(out.vertices, out.tets).unwrap();
-    let disc = mesh_disc(&mesh);
+    let disc = support::mesh_disc(&mesh, 1.5);
     let planes = BoundaryPlanes::new(&mesh, disc.horizon());
     let boundary = MeshFaces(planes.clone());
     let layer = GhostLayer::build_with(&disc, &boundary, GhostFit::Affine).unwrap();

@@ -208,15 +208,7 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
     let nu = 0.3;
     let size = [0.08, 0.03, 0.03];
     let (disc, _, lambda) = block(size, [8, 3, 3], 1.5);
-    let delta = disc.horizon();
-    let mut mat = ChenMaterial::from_young_poisson(200e9, nu, 7800.0).unwrap();
-    let b = 15.0 * mat.shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
-    let a_y = 4.0 * delta * b * eps_y;
-    mat.plasticity = Some(YieldParams {
-        psi0: 0.5 * a_y * a_y,
-        gamma_ratio: 0.2,
-        from_strain: true,
-    });
+    let mat = support::yielding_steel(nu, eps_y, disc.horizon());
     let x = disc.rest_positions().to_vec();
     let inner = support::interior(&x, size, 0.75 * lambda);
     let surface: Vec<usize> = (0..x.len()).filter(|i| !inner.contains(i)).collect();

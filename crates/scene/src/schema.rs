@@ -181,7 +181,8 @@ pub struct SimulationSpec {
     /// Chen: how the constants meet the discrete family: `"fitted"` (default: the dilatation
     /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle), `"none"`
     /// (MODEL.md's constants) or `"ghosts"` (the fitted correction over families completed by
-    /// ghost particles mirrored across the mesh's boundary; elastic materials only).
+    /// ghost particles mirrored across the mesh's boundary; with fracture a ghost is dropped
+    /// once its source's family loses a bond).
     pub correction: Option<String>,
     /// Chen with `correction = "ghosts"`: how a ghost extrapolates its source's displacement,
     /// `"quadratic"` (default) or `"affine"`.

@@ -382,8 +382,10 @@ impl ChenModel {
     /// As [`ChenModel::with_options`], with the particles from `active` on passive: they store
     /// no energy (`a_i = b_i = 0`) and carry no force state of their own, but sit in their
     /// neighbours' families, which read their positions (the ghosts of [`crate::ghost`]). The
-    /// correction's spread is over the active particles. Passive particles are refused with a
-    /// plastic or fracturing material (their bonds would need the history of the real ones).
+    /// correction's spread is over the active particles. A passive particle never yields (its
+    /// own ends' plastic extensions stay zero; an active particle's bonds to it yield as any
+    /// other), and its bonds break by the same criterion as every bond, with the thresholds
+    /// of its material.
     pub fn with_passive(
         disc: Discretization,
         materials: &[ChenMaterial],
@@ -398,17 +400,6 @@ impl ChenModel {
             return Err(PhysicsError::BadSetting(format!(
                 "{active} active particles asked of {n}"
             )));
-        }
-        if active < n
-            && materials
-                .iter()
-                .any(|m| m.plasticity.is_some() || m.fractures())
-        {
-            return Err(PhysicsError::BadSetting(
-                "ghost particles are built for elastic materials only: a plastic or \
-                 fracturing material has no ghosts yet"
-                    .into(),
-            ));
         }
         disc.check_material_ids(materials.len())?;
         let delta = disc.horizon();
@@ -514,18 +505,17 @@ impl ChenModel {
         let yield_params = plastic.then(|| {
             (0..n)
                 .map(|i| {
-                    mat(i)
-                        .plasticity
-                        .map_or((f64::INFINITY, f64::INFINITY), |p| {
-                            // a yield strain's Psi0 scales with b_i^2 (A_dev = 4 omega b_i ed)
-                            let b0 = 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5));
-                            let scale = if p.from_strain {
-                                (coef_b[i] / b0).powi(2)
-                            } else {
-                                1.0
-                            };
-                            (p.psi0 * scale, p.gamma_ratio)
-                        })
+                    let plasticity = mat(i).plasticity.filter(|_| i < active);
+                    plasticity.map_or((f64::INFINITY, f64::INFINITY), |p| {
+                        // a yield strain's Psi0 scales with b_i^2 (A_dev = 4 omega b_i ed)
+                        let b0 = 15.0 * mat(i).shear_modulus / (2.0 * PI * delta.powi(5));
+                        let scale = if p.from_strain {
+                            (coef_b[i] / b0).powi(2)
+                        } else {
+                            1.0
+                        };
+                        (p.psi0 * scale, p.gamma_ratio)
+                    })
                 })
                 .collect()
         });
@@ -687,6 +677,16 @@ impl ChenModel {
     /// Damage state, when some material fractures.
     pub fn damage(&self) -> Option<&Damage> {
         self.damage.as_ref()
+    }
+
+    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family, as
+    /// a ghost layer drops a ghost whose source's family broke: their bonds become broken
+    /// without counting as damage ([`Damage::isolate`]). Nothing happens without fracture (no
+    /// bond can break, so no ghost is dropped).
+    pub(crate) fn isolate(&mut self, isolated: &[bool]) {
+        if let Some(d) = self.damage.as_mut() {
+            d.isolate(self.setup.disc.family(), isolated);
+        }
     }
 
     /// Constants `(a_i, b_i)` of particle `i` (N/m^6 per unit dilatation, N/m^7 per m).

@@ -3,7 +3,7 @@
 
 use perifrac_physics::math::{add, mat_vec, norm, sub, Mat3, Vec3};
 use perifrac_physics::{
-    ChenMaterial, ChenModel, ChenOptions, Discretization, FamilyReport, ForceModel,
+    ChenMaterial, ChenModel, ChenOptions, Discretization, FamilyReport, ForceModel, YieldParams,
 };
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
@@ -202,4 +202,31 @@ pub fn tension<M: ForceModel>(m: M, size: [f64; 3], nu: f64, young: f64, rho: f6
         .sum::<f64>();
     let stress = -reaction / (size[1] * size[2]);
     (stress / exx / young, -eyy / exx)
+}
+
+/// `mesh` as particles at horizon factor `k` (times the mean edge length).
+pub fn mesh_disc(mesh: &TetMesh, k: f64) -> Discretization {
+    Discretization::from_tets(
+        &mesh.rest_barycentres(),
+        &mesh.rest_volumes(),
+        mesh.neighbours(),
+        k * mesh.mean_edge_length(),
+    )
+    .expect("discretisation")
+    .0
+}
+
+/// Steel of Poisson's ratio `nu` whose bonds yield at the deviatoric strain `eps_y` (the
+/// scene's `yield_strain`, converted with MODEL.md's `b` at horizon `delta` (m) and rescaled
+/// per particle), extensions capped at 0.2 of a bond.
+pub fn yielding_steel(nu: f64, eps_y: f64, delta: f64) -> ChenMaterial {
+    let mut mat = ChenMaterial::from_young_poisson(200e9, nu, 7800.0).unwrap();
+    let b = 15.0 * mat.shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
+    let a_y = 4.0 * delta * b * eps_y;
+    mat.plasticity = Some(YieldParams {
+        psi0: 0.5 * a_y * a_y,
+        gamma_ratio: 0.2,
+        from_strain: true,
+    });
+    mat
 }

@@ -311,13 +311,6 @@ impl Setup {
 
         let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
-        if precrack_faces > 0 && sim.correction.as_deref() == Some("ghosts") {
-            // a ghost bonds to every real particle within a horizon, across a crack too
-            return Err(ctx.err(
-                "simulation.correction",
-                "\"ghosts\" is not built for scenes with initial cracks: use \"fitted\"",
-            ));
-        }
         times.mesh = stage.elapsed();
         let stage = Instant::now();
         let (mut disc, report) =

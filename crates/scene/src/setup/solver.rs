@@ -257,8 +257,8 @@ pub(super) fn model(
 }
 
 /// Chen's model of `materials` over `disc` with ghosts across the boundary of `mesh`
-/// (`correction = "ghosts"`): refused for plastic and fracturing materials and with the
-/// inversion guard, which the ghosts do not carry yet.
+/// (`correction = "ghosts"`), with the inversion guard when asked for (its springs on the
+/// ghosts' bonds too).
 fn ghosted(
     ctx: &Ctx,
     sim: &SimulationSpec,
@@ -277,29 +277,21 @@ fn ghosted(
             ))
         }
     };
-    if let Some(i) = materials
-        .iter()
-        .position(|m| m.plasticity.is_some() || m.fractures())
-    {
-        return Err(ctx.err(
-            "simulation.correction",
-            format!(
-                "\"ghosts\" completes the families of elastic materials only for now, and \
-                 material {i} yields or breaks (docs/DECISIONS.md, \"Ghost particles across \
-                 the faces\"): use \"fitted\""
-            ),
-        ));
-    }
-    if sim.inversion_guard.is_some() {
-        return Err(ctx.err(
-            "simulation.inversion_guard",
-            "is not built for ghost particles (correction = \"ghosts\")",
-        ));
-    }
+    let guard = match sim.inversion_guard {
+        None => None,
+        Some(f) => Some(ctx.positive("simulation.inversion_guard", f, "")?),
+    };
     let physics = |cause: PhysicsError| ctx.physics(cause);
     let faces = MeshFaces(BoundaryPlanes::new(mesh, disc.horizon()));
     let layer = GhostLayer::build_with(&disc, &faces, fit).map_err(physics)?;
-    let model = Ghosted::chen_with_layer(disc, layer, materials, options).map_err(physics)?;
+    let real = disc.len();
+    let inner = ChenModel::with_passive(layer.extended().clone(), materials, options, real)
+        .map_err(physics)?;
+    let inner = match guard {
+        None => inner,
+        Some(f) => inner.with_inversion_guard(f).map_err(physics)?,
+    };
+    let model = Ghosted::new(disc, layer, inner).map_err(physics)?;
     Ok(AnyModel::ChenGhosts(Box::new(model)))
 }
 
