@@ -106,6 +106,27 @@ impl Damage {
         }
     }
 
+    /// [`Damage::isolate`] for the particles `newly`, none of them isolated before nor bonded
+    /// to another of them, touching only their bonds and their reverses: the same states and
+    /// counts as the whole recount, at the cost of the rows concerned.
+    pub(crate) fn isolate_new(&mut self, family: &Family, newly: &[u32]) {
+        let nb = family.neighbours();
+        for &p in newly {
+            let p = p as usize;
+            for k in family.range(p) {
+                let j = nb[k] as usize;
+                if let Some(r) = family.range(j).find(|&r| nb[r] as usize == p) {
+                    self.intact[j] -= u32::from(self.state[r] == 1);
+                    self.initial[j] -= 1;
+                    self.state[r] = 0;
+                }
+                self.state[k] = 0;
+            }
+            self.initial[p] = 0;
+            self.intact[p] = 0;
+        }
+    }
+
     /// The states of the bonds of `real` (a family whose particle `i`'s row is the first
     /// `real.range(i).len()` bonds of `ext`'s row `i`, as a ghost layer extends it) copied
     /// from `ext_damage` over `ext` into this damage state over `real`, the counts recounted:

@@ -292,6 +292,30 @@ fn opposed(near: &[(Vec3, Vec3, FaceKind)], set: u32) -> bool {
         .any(|(a, p)| member[a + 1..].iter().any(|q| dot(p.1, q.1) < -0.5))
 }
 
+/// The pairs `(row, value)` that `items` gives (twice: once to count, once to fill) as CSR
+/// rows `0..rows`, each row's values in the order given.
+fn csr<T, I>(rows: usize, items: impl Fn() -> I) -> (Vec<u32>, Vec<T>)
+where
+    T: Copy + Default,
+    I: Iterator<Item = (u32, T)>,
+{
+    let mut offsets = vec![0u32; rows + 1];
+    for (r, _) in items() {
+        offsets[r as usize + 1] += 1;
+    }
+    for r in 0..rows {
+        offsets[r + 1] += offsets[r];
+    }
+    let mut next = offsets[..rows].to_vec();
+    let mut values = vec![T::default(); offsets[rows] as usize];
+    for (r, v) in items() {
+        let slot = &mut next[r as usize];
+        values[*slot as usize] = v;
+        *slot += 1;
+    }
+    (offsets, values)
+}
+
 /// A ghost's terms `(k, c_gk)` over real particles (dimensionless coefficients).
 type Terms = Vec<(u32, f64)>;
 
@@ -439,7 +463,7 @@ impl GhostLayer {
     /// Finds each image's real neighbours, drops the unbonded, and builds the layer.
     fn bond(
         disc: &Discretization,
-        images: Vec<Image>,
+        mut images: Vec<Image>,
         unfitted: usize,
         affine_fallbacks: usize,
     ) -> Result<GhostLayer, PhysicsError> {
@@ -474,13 +498,12 @@ impl GhostLayer {
             .collect();
         let m = kept.len();
         // per real particle, the ghosts in its family (ascending)
-        let mut ghost_rows = vec![Vec::new(); n];
-        for (g, &im) in kept.iter().enumerate() {
-            for &j in &found[im].1 {
-                ghost_rows[j as usize].push((n + g) as u32);
-            }
-        }
-        let bonds = 2 * kept.iter().map(|&im| found[im].1.len()).sum::<usize>();
+        let (ghost_offsets, ghost_rows) = csr(n, || {
+            kept.iter()
+                .enumerate()
+                .flat_map(|(g, &im)| found[im].1.iter().map(move |&j| (j, (n + g) as u32)))
+        });
+        let bonds = 2 * ghost_rows.len();
         let total = fam.num_bonds() + bonds;
         if total > u32::MAX as usize || n + m > u32::MAX as usize {
             return Err(PhysicsError::TooManyBonds(total));
@@ -488,17 +511,20 @@ impl GhostLayer {
         let mut offsets = Vec::with_capacity(n + m + 1);
         let mut neighbours = Vec::with_capacity(total);
         offsets.push(0u32);
-        for (i, extra) in ghost_rows.iter().enumerate() {
+        for i in 0..n {
             neighbours.extend_from_slice(fam.row(i));
-            neighbours.extend_from_slice(extra);
+            let r = ghost_offsets[i] as usize..ghost_offsets[i + 1] as usize;
+            neighbours.extend_from_slice(&ghost_rows[r]);
             offsets.push(neighbours.len() as u32);
         }
+        drop((ghost_offsets, ghost_rows));
         for &im in &kept {
             neighbours.extend_from_slice(&found[im].1);
             offsets.push(neighbours.len() as u32);
         }
         let mut rest = x.to_vec();
         rest.extend(kept.iter().map(|&im| found[im].0));
+        drop(found);
         let mut volumes = disc.volumes().to_vec();
         let mut materials = disc.materials().to_vec();
         for &im in &kept {
@@ -508,38 +534,31 @@ impl GhostLayer {
         }
         let family = Family::from_rows(&rest, offsets, neighbours);
         let extended = Discretization::from_parts(rest, volumes, materials, delta, family);
-        // the combinations, and their transpose by real particle
-        let mut combo_offsets = vec![0u32];
-        let mut combo = Vec::new();
+        // the combinations (moved out of the images), and their transpose by real particle,
+        // each real particle's ghosts in ghost order
+        let mut combo_offsets = Vec::with_capacity(m + 1);
+        combo_offsets.push(0u32);
+        let mut combo = Vec::with_capacity(kept.iter().map(|&im| images[im].terms.len()).sum());
         let mut shift = Vec::with_capacity(m);
-        let mut fold_rows = vec![Vec::new(); n];
-        for (g, &im) in kept.iter().enumerate() {
-            let image = &images[im];
-            for &(k, c) in &image.terms {
-                fold_rows[k as usize].push((g as u32, c));
-            }
+        let mut source = Vec::with_capacity(m);
+        for &im in &kept {
+            let image = &mut images[im];
             combo.extend_from_slice(&image.terms);
+            image.terms = Vec::new();
             combo_offsets.push(combo.len() as u32);
             shift.push(image.shift);
+            source.push(image.source);
         }
-        let mut fold_offsets = vec![0u32];
-        let mut fold = Vec::with_capacity(combo.len());
-        for row in &fold_rows {
-            fold.extend_from_slice(row);
-            fold_offsets.push(fold.len() as u32);
-        }
+        drop(images);
+        let (fold_offsets, fold) = csr(n, || {
+            (0..m).flat_map(|g| {
+                let r = combo_offsets[g] as usize..combo_offsets[g + 1] as usize;
+                combo[r].iter().map(move |&(k, c)| (k, (g as u32, c)))
+            })
+        });
         // per real particle, the ghosts it is the source of
-        let source: Vec<u32> = kept.iter().map(|&im| images[im].source).collect();
-        let mut of_source = vec![Vec::new(); n];
-        for (g, &s) in source.iter().enumerate() {
-            of_source[s as usize].push(g as u32);
-        }
-        let mut images_offsets = vec![0u32];
-        let mut images_of = Vec::with_capacity(m);
-        for row in &of_source {
-            images_of.extend_from_slice(row);
-            images_offsets.push(images_of.len() as u32);
-        }
+        let (images_offsets, images_of) =
+            csr(n, || source.iter().enumerate().map(|(g, &s)| (s, g as u32)));
         let gains = (0..m)
             .map(|g| {
                 let r = combo_offsets[g] as usize..combo_offsets[g + 1] as usize;
@@ -648,13 +667,23 @@ impl GhostLayer {
 /// source's family broke is dropped.
 pub trait Isolate {
     /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family:
-    /// their bonds become broken without counting as damage. Idempotent.
+    /// their bonds become broken without counting as damage, every count recounted.
+    /// Idempotent.
     fn isolate(&mut self, isolated: &[bool]);
+
+    /// Cuts the particles `newly` out of every family as [`Isolate::isolate`] would, when none
+    /// of them was cut before and no two of them are bonded (ghosts), touching only their
+    /// bonds.
+    fn isolate_new(&mut self, newly: &[u32]);
 }
 
 impl Isolate for ChenModel {
     fn isolate(&mut self, isolated: &[bool]) {
         ChenModel::isolate(self, isolated)
+    }
+
+    fn isolate_new(&mut self, newly: &[u32]) {
+        ChenModel::isolate_new(self, newly)
     }
 }
 
@@ -681,6 +710,8 @@ pub struct Ghosted<M> {
     dropped: Vec<bool>,
     /// The pairs the inner model broke in the last check (extended indices).
     broken: Vec<(u32, u32)>,
+    /// The ghosts the last check dropped (extended indices).
+    newly: Vec<u32>,
 }
 
 impl<M: ForceModel + Isolate> Ghosted<M> {
@@ -713,6 +744,7 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
             damage,
             dropped: vec![false; total],
             broken: Vec::new(),
+            newly: Vec::new(),
         })
     }
 
@@ -739,7 +771,7 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
             return false;
         }
         let n = self.real.len();
-        let mut any = false;
+        self.newly.clear();
         for &(i, j) in &self.broken {
             // a ghost's bonds (j >= n) are not the mesh's
             if (j as usize) < n {
@@ -747,14 +779,17 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
                 for s in [i, j] {
                     for &g in self.layer.images_of(s as usize) {
                         let slot = &mut self.dropped[n + g as usize];
-                        any |= !*slot;
-                        *slot = true;
+                        if !*slot {
+                            *slot = true;
+                            self.newly.push((n + g as usize) as u32);
+                        }
                     }
                 }
             }
         }
+        let any = !self.newly.is_empty();
         if any {
-            self.inner.isolate(&self.dropped);
+            self.inner.isolate_new(&self.newly);
         }
         self.sync_damage();
         any

@@ -222,6 +222,27 @@ impl WorkEstimate {
     }
 }
 
+impl WorkEstimate {
+    /// The same run with a ghost layer of `ghosts` ghosts, `bonds` directed bonds to real
+    /// particles and `layer_bytes` of its own (its maps and the extended discretisation the
+    /// model copies): the ghosts' bonds walk the loops as the real ones do, and the ghosts
+    /// take a particle's bytes each (the output still counts the real particles alone).
+    pub fn with_ghosts(self, ghosts: u64, bonds: u64, layer_bytes: u64, extra: u64) -> Self {
+        let bonds = self.bonds.saturating_add(bonds);
+        WorkEstimate {
+            bonds,
+            memory_bytes: memory(
+                self.particles.saturating_add(ghosts),
+                self.vertices,
+                bonds,
+                extra,
+            )
+            .saturating_add(layer_bytes),
+            ..self
+        }
+    }
+}
+
 /// Bytes a bond beyond [`BYTES_PER_BOND`]: the implicit step's matrix and factor, the
 /// inversion guard's stiffnesses.
 pub fn extra_per_bond(implicit: bool, guard: bool) -> u64 {

@@ -501,3 +501,34 @@ fn the_inversion_guard_is_a_setting_of_both_models() {
         "{e}"
     );
 }
+
+#[test]
+fn a_ghost_layer_too_big_for_memory_is_refused_before_the_model_over_it() {
+    // The slab with ghosts (a slab two cells thick: more ghosts than particles) needs more
+    // than without them (measured 49.2 MB against 8.5 MB); a budget a byte under the ghosted
+    // estimate passes the plain run and every check the ghosted one makes before its layer
+    // is built, and refuses it once the layer is, before the model over it.
+    let ghosted = SLAB.replace("[simulation]\n", "[simulation]\ncorrection = \"ghosts\"\n");
+    let plain = Setup::with_limits(&scene(SLAB), None, &limits()).unwrap();
+    let with = Setup::with_limits(&scene(&ghosted), None, &limits()).unwrap();
+    let (p, g) = (plain.info.estimate, with.info.estimate);
+    let ghosts = with.info.ghosts.clone().expect("ghosts");
+    eprintln!(
+        "plain {} B, {} bonds; ghosted {} B, {} bonds ({ghosts:?})",
+        p.memory_bytes, p.bonds, g.memory_bytes, g.bonds
+    );
+    assert_eq!(g.bonds, p.bonds + ghosts.bonds as u64);
+    assert!(g.memory_bytes > 2 * p.memory_bytes);
+    let between = Limits {
+        memory_bytes: g.memory_bytes - 1,
+        ..limits()
+    };
+    assert!(Setup::with_limits(&scene(SLAB), None, &between).is_ok());
+    let e = match Setup::with_limits(&scene(&ghosted), None, &between) {
+        Ok(_) => panic!("the ghosted slab passed a budget under its estimate"),
+        Err(e) => e,
+    };
+    assert!(matches!(e, SceneError::TooLarge { .. }), "{e:?}");
+    let msg = e.to_string();
+    assert!(msg.contains("of memory"), "{msg}");
+}

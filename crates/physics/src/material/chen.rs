@@ -99,6 +99,9 @@ struct Setup {
     reverse: Option<Vec<u32>>,
     /// What [`ChenModel::correction`] reports, made with the constants.
     correction: Correction,
+    /// The particles before this one are active; those from it on are passive (no energy, no
+    /// force state: their dilatation is never needed).
+    active: usize,
     /// Per-particle `(Psi0, gamma_ratio)` when some material is plastic (infinite: elastic).
     yield_params: Option<Vec<(f64, f64)>>,
     /// Per particle `[r_min + r_max (m), 1 / (r_min r_max) (1/m^2), C (1 - margin)]` with
@@ -550,6 +553,7 @@ impl ChenModel {
                 dil_weights,
                 reverse,
                 correction,
+                active,
                 yield_params,
                 yield_inside,
                 options,
@@ -689,6 +693,14 @@ impl ChenModel {
         }
     }
 
+    /// [`ChenModel::isolate`] for the particles `newly` alone, none isolated before nor bonded
+    /// to another of them: only their rows and their reverses are touched.
+    pub(crate) fn isolate_new(&mut self, newly: &[u32]) {
+        if let Some(d) = self.damage.as_mut() {
+            d.isolate_new(self.setup.disc.family(), newly);
+        }
+    }
+
     /// Constants `(a_i, b_i)` of particle `i` (N/m^6 per unit dilatation, N/m^7 per m).
     pub fn constants(&self, i: usize) -> (f64, f64) {
         (self.setup.coef_a[i], self.setup.coef_b[i])
@@ -710,11 +722,16 @@ impl ChenModel {
         }
         let s = &self.setup;
         let inp = s.inputs(y);
+        // a passive particle's dilatation is multiplied by its zero constants: not computed
+        let active = s.active;
         if let Some(row) = s.lane_row(&self.packed).filter(|_| self.ep.is_none()) {
             let moment = s.options.energy_consistent;
             let (fam, c) = (s.disc.family(), &s.c_theta);
             let alive = self.damage.as_ref().map(Damage::bond_state);
             map_particles(&mut self.ts, |i| {
+                if i >= active {
+                    return [0.0; 2];
+                }
                 let (sums, _) = row.dilatation(i, alive.map(|a| &a[fam.range(i)]));
                 theta_moment(c[i], sums, moment).into()
             });
@@ -724,9 +741,19 @@ impl ChenModel {
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             let ts = &mut self.ts;
             if s.options.energy_consistent {
-                map_particles(ts, |i| dilatation::<_, _, _, true>(inp, w, p, d, i).into())
+                map_particles(ts, |i| {
+                    if i >= active {
+                        return [0.0; 2];
+                    }
+                    dilatation::<_, _, _, true>(inp, w, p, d, i).into()
+                })
             } else {
-                map_particles(ts, |i| dilatation::<_, _, _, false>(inp, w, p, d, i).into())
+                map_particles(ts, |i| {
+                    if i >= active {
+                        return [0.0; 2];
+                    }
+                    dilatation::<_, _, _, false>(inp, w, p, d, i).into()
+                })
             }
         });
         self.pressure_pass();
@@ -1129,6 +1156,7 @@ impl ForceModel for ChenModel {
             dil_weights,
             reverse,
             correction: _,
+            active: _,
             yield_params,
             yield_inside,
             options: _,

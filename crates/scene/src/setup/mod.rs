@@ -318,13 +318,24 @@ impl Setup {
         disc.set_materials(&ids).map_err(physics)?;
         times.families = stage.elapsed();
         let stage = Instant::now();
-        let mut model = solver::model(&ctx, sim, disc, &mesh, &materials)?;
+        let counted = estimate.with_bonds(report.bonds as u64, extra);
+        // with ghosts, the memory again once the layer is built, before the model over it
+        let with_ghosts = |g: &GhostReport, layer_bytes: usize| {
+            counted.with_ghosts(g.ghosts as u64, g.bonds as u64, layer_bytes as u64, extra)
+        };
+        let check_ghosts = |g: &GhostReport, layer_bytes: usize| {
+            limits
+                .check_memory(&with_ghosts(g, layer_bytes))
+                .map_err(too_large)
+        };
+        let mut model = solver::model(&ctx, sim, disc, &mesh, &materials, &check_ghosts)?;
         times.model = stage.elapsed();
         let correction = model.correction();
         let ghosts = model.ghosts();
-        // the ghosts' bonds to real particles walk the loops as the real ones do
-        let ghost_bonds = ghosts.as_ref().map_or(0, |g| g.bonds);
-        let mut estimate = estimate.with_bonds((report.bonds + ghost_bonds) as u64, extra);
+        let mut estimate = match (&ghosts, model.ghost_layer_bytes()) {
+            (Some(g), bytes) => with_ghosts(g, bytes),
+            (None, _) => counted,
+        };
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
         let mean_radius = radii.iter().sum::<f64>() / radii.len() as f64;

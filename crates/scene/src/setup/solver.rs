@@ -100,12 +100,12 @@ pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> 
 
 /// A force model of either kind, before an integrator owns it.
 pub(super) enum AnyModel {
-    /// Chen's.
-    Chen(ChenModel),
+    /// Chen's (each variant boxed: the enum is moved whole, and the models differ in size).
+    Chen(Box<ChenModel>),
     /// Chen's over families completed by ghost particles (`correction = "ghosts"`).
     ChenGhosts(Box<Ghosted<ChenModel>>),
     /// Xu's.
-    Xu(XuModel),
+    Xu(Box<XuModel>),
 }
 
 impl AnyModel {
@@ -134,6 +134,14 @@ impl AnyModel {
             _ => None,
         }
     }
+
+    /// Heap bytes of the ghost layer (0 without ghosts).
+    pub(super) fn ghost_layer_bytes(&self) -> usize {
+        match self {
+            AnyModel::ChenGhosts(m) => m.layer().memory_bytes(),
+            _ => 0,
+        }
+    }
 }
 
 /// A mesh's boundary as the faces ghosts are mirrored across (all free).
@@ -158,13 +166,19 @@ impl GhostFaces for MeshFaces {
     }
 }
 
-/// The model of `materials` over `disc` (the particles of `mesh`), with the options of `sim`.
+/// A check of the memory a run with a ghost layer needs, given the layer's report and bytes,
+/// made before the model over it is built.
+pub(super) type GhostCheck<'a> = &'a dyn Fn(&GhostReport, usize) -> Result<(), SceneError>;
+
+/// The model of `materials` over `disc` (the particles of `mesh`), with the options of `sim`;
+/// `check` refuses a ghost layer whose run would not fit in memory.
 pub(super) fn model(
     ctx: &Ctx,
     sim: &SimulationSpec,
     disc: Discretization,
     mesh: &TetMesh,
     materials: &Materials,
+    check: GhostCheck,
 ) -> Result<AnyModel, SceneError> {
     let physics = |cause: PhysicsError| ctx.physics(cause);
     match materials {
@@ -205,7 +219,7 @@ pub(super) fn model(
                 }
             };
             if ghosts {
-                return ghosted(ctx, sim, disc, mesh, m.as_slice(), options);
+                return ghosted(ctx, sim, disc, mesh, m.as_slice(), options, check);
             }
             let model = ChenModel::with_options(disc, m, options).map_err(physics)?;
             let model = match sim.inversion_guard {
@@ -215,7 +229,7 @@ pub(super) fn model(
                     model.with_inversion_guard(f).map_err(physics)?
                 }
             };
-            Ok(AnyModel::Chen(model))
+            Ok(AnyModel::Chen(Box::new(model)))
         }
         Materials::Xu(m) => {
             if sim.ghost_fit.is_some() {
@@ -249,9 +263,9 @@ pub(super) fn model(
                 kernel,
                 inversion_guard,
             };
-            Ok(AnyModel::Xu(
+            Ok(AnyModel::Xu(Box::new(
                 XuModel::new(disc, m, options).map_err(physics)?,
-            ))
+            )))
         }
     }
 }
@@ -266,6 +280,7 @@ fn ghosted(
     mesh: &TetMesh,
     materials: &[perifrac_physics::ChenMaterial],
     options: ChenOptions,
+    check: GhostCheck,
 ) -> Result<AnyModel, SceneError> {
     let fit = match sim.ghost_fit.as_deref() {
         None | Some("quadratic") => GhostFit::Quadratic,
@@ -284,6 +299,7 @@ fn ghosted(
     let physics = |cause: PhysicsError| ctx.physics(cause);
     let faces = MeshFaces(BoundaryPlanes::new(mesh, disc.horizon()));
     let layer = GhostLayer::build_with(&disc, &faces, fit).map_err(physics)?;
+    check(layer.report(), layer.memory_bytes())?;
     let real = disc.len();
     let inner = ChenModel::with_passive(layer.extended().clone(), materials, options, real)
         .map_err(physics)?;
@@ -356,26 +372,26 @@ pub(super) fn build(
     if sim.event_search == Some(true) {
         let search = search_config(ctx, sim)?;
         return Ok(match model {
-            AnyModel::Chen(m) => {
-                Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
-            }
+            AnyModel::Chen(m) => Box::new(
+                Searched::new(*m, rest, horizon, loads, explicit, search).map_err(physics)?,
+            ),
             AnyModel::ChenGhosts(m) => Box::new(
                 Searched::new(*m, rest, horizon, loads, explicit, search).map_err(physics)?,
             ),
-            AnyModel::Xu(m) => {
-                Box::new(Searched::new(m, rest, horizon, loads, explicit, search).map_err(physics)?)
-            }
+            AnyModel::Xu(m) => Box::new(
+                Searched::new(*m, rest, horizon, loads, explicit, search).map_err(physics)?,
+            ),
         });
     }
     Ok(match (kind, model) {
         (Kind::Explicit, AnyModel::Chen(m)) => {
-            Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
+            Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
         (Kind::Explicit, AnyModel::ChenGhosts(m)) => {
             Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
         (Kind::Explicit, AnyModel::Xu(m)) => {
-            Box::new(Explicit::new(m, rest, horizon, loads, explicit).map_err(physics)?)
+            Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
         (Kind::Implicit, AnyModel::Xu(m)) => {
             let base = ImplicitConfig::with_dt(dt);
@@ -386,7 +402,7 @@ pub(super) fn build(
                 refactor_share: sim.refactor_share.unwrap_or(base.refactor_share),
                 ..base
             };
-            Box::new(Implicit::new(m, rest, loads, config).map_err(physics)?)
+            Box::new(Implicit::new(*m, rest, loads, config).map_err(physics)?)
         }
         (Kind::Implicit, AnyModel::Chen(_) | AnyModel::ChenGhosts(_)) => {
             return Err(ctx.err(
