@@ -407,8 +407,7 @@ fn ghosts_tear_a_sheet_through_its_initial_cracks() {
     eprintln!("{} bonds broken, {pieces} pieces", d.broken_bonds());
     // torn apart along the strips pulled either way: at least the two halves
     assert!(pieces >= 2, "{pieces} pieces");
-    // the damage shown is over the real bonds, one value a particle
-    assert_eq!(damage.len(), setup.info.particles);
+    // the damage shown is over the real bonds
     assert!(damage.iter().all(|p| (0.0..=1.0).contains(p)));
     assert!(damage.iter().any(|&p| p > 0.0));
 }

@@ -13,6 +13,9 @@ use crate::par::{for_rows, map_particles};
 pub struct Damage {
     /// Per directed bond: 1 intact, 0 broken, 2 broken in the current check (0 after it).
     state: Vec<u8>,
+    /// The particles before this one are counted in `phi`; a bond with an end from it on (a
+    /// passive particle's, a ghost's) breaks as any other but counts towards no `phi`.
+    counted: usize,
     initial: Vec<u32>,
     intact: Vec<u32>,
     s_crit: Vec<f64>,
@@ -26,10 +29,34 @@ pub struct Damage {
 impl Damage {
     /// All bonds intact; `s_crit` and `alpha` per particle (infinite `s_crit`: never breaks).
     pub(crate) fn new(family: &Family, s_crit: Vec<f64>, alpha: Vec<f64>) -> Self {
+        Self::with_counted(family, s_crit, alpha, family.len())
+    }
+
+    /// [`Damage::new`] with only the bonds between the first `counted` particles counted in
+    /// `phi` (a ghost layer's real particles: its ghosts' bonds break but are not damage, and a
+    /// ghost's `phi` stays 0).
+    pub(crate) fn with_counted(
+        family: &Family,
+        s_crit: Vec<f64>,
+        alpha: Vec<f64>,
+        counted: usize,
+    ) -> Self {
         let n = family.len();
-        let initial: Vec<u32> = (0..n).map(|i| family.range(i).len() as u32).collect();
+        let nb = family.neighbours();
+        let initial: Vec<u32> = (0..n)
+            .map(|i| {
+                if i >= counted {
+                    return 0;
+                }
+                family
+                    .range(i)
+                    .filter(|&k| (nb[k] as usize) < counted)
+                    .count() as u32
+            })
+            .collect();
         Damage {
             state: vec![1; family.num_bonds()],
+            counted,
             intact: initial.clone(),
             initial,
             s_crit,
@@ -74,63 +101,46 @@ impl Damage {
                 message: format!("state {b} is neither intact (1) nor broken (0)"),
             });
         }
-        for (i, c) in self.intact.iter_mut().enumerate() {
-            *c = self.state[family.range(i)]
-                .iter()
-                .map(|&b| u32::from(b))
-                .sum();
-        }
+        self.recount(family);
         Ok(())
     }
 
-    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family:
-    /// each bond with an isolated end becomes broken, and no longer counts among either end's
-    /// initial bonds, so it moves no `phi` (a ghost dropped is not damage). Idempotent; also
-    /// what restores the counts after [`Damage::restore`], which knows only the states.
-    pub(crate) fn isolate(&mut self, family: &Family, isolated: &[bool]) {
-        let nb = family.neighbours();
-        for i in 0..family.len() {
-            let mut kept = 0;
-            for k in family.range(i) {
-                if isolated[i] || isolated[nb[k] as usize] {
-                    self.state[k] = 0;
-                } else {
-                    kept += 1;
-                }
-            }
-            self.initial[i] = kept;
-            self.intact[i] = self.state[family.range(i)]
-                .iter()
-                .map(|&b| u32::from(b))
-                .sum();
+    /// Recounts every particle's intact counted bonds from the states.
+    fn recount(&mut self, family: &Family) {
+        let (nb, counted) = (family.neighbours(), self.counted);
+        for (i, c) in self.intact.iter_mut().enumerate() {
+            *c = if i >= counted {
+                0
+            } else {
+                family
+                    .range(i)
+                    .filter(|&k| self.state[k] == 1 && (nb[k] as usize) < counted)
+                    .count() as u32
+            };
         }
     }
 
-    /// [`Damage::isolate`] for the particles `newly`, none of them isolated before nor bonded
-    /// to another of them, touching only their bonds and their reverses: the same states and
-    /// counts as the whole recount, at the cost of the rows concerned.
-    pub(crate) fn isolate_new(&mut self, family: &Family, newly: &[u32]) {
+    /// Cuts the particles `newly` (none counted in `phi`) out of every family: their bonds and
+    /// their reverses become broken. Such bonds count towards no `phi`, so the counts stay.
+    pub(crate) fn isolate(&mut self, family: &Family, newly: &[u32]) {
         let nb = family.neighbours();
         for &p in newly {
             let p = p as usize;
             for k in family.range(p) {
                 let j = nb[k] as usize;
                 if let Some(r) = family.range(j).find(|&r| nb[r] as usize == p) {
-                    self.intact[j] -= u32::from(self.state[r] == 1);
-                    self.initial[j] -= 1;
                     self.state[r] = 0;
                 }
                 self.state[k] = 0;
             }
-            self.initial[p] = 0;
-            self.intact[p] = 0;
         }
     }
 
     /// The states of the bonds of `real` (a family whose particle `i`'s row is the first
     /// `real.range(i).len()` bonds of `ext`'s row `i`, as a ghost layer extends it) copied
-    /// from `ext_damage` over `ext` into this damage state over `real`, the counts recounted:
-    /// `phi` over the real bonds alone.
+    /// from `ext_damage` over `ext` into this damage state over `real`, the counts and the
+    /// overshoot with them: `phi` over the real bonds, as `ext_damage` counts it when it
+    /// counts the real particles alone.
     pub(crate) fn copy_real(&mut self, real: &Family, ext: &Family, ext_damage: &Damage) {
         for i in 0..real.len() {
             let (r, e) = (real.range(i), ext.range(i).start);
@@ -139,6 +149,11 @@ impl Damage {
             self.intact[i] = self.state[r].iter().map(|&b| u32::from(b)).sum();
         }
         self.overshoot = ext_damage.overshoot;
+    }
+
+    /// Sets the overshoot to 0, as a check that broke nothing does.
+    pub(crate) fn clear_overshoot(&mut self) {
+        self.overshoot = 0.0;
     }
 
     /// A damage state over `real`, all bonds intact, with the thresholds of this one's first
@@ -157,6 +172,7 @@ impl Damage {
     pub fn memory_bytes(&self) -> usize {
         let Damage {
             state,
+            counted: _,
             initial,
             intact,
             s_crit,
@@ -283,11 +299,14 @@ impl Damage {
             if self.new_count[i] == 0 {
                 continue;
             }
-            self.intact[i] -= self.new_count[i];
             for k in family.range(i) {
                 if self.state[k] == 2 {
                     self.state[k] = 0;
                     let j = family.neighbours()[k];
+                    // only bonds between counted particles move `phi`
+                    if i < self.counted && (j as usize) < self.counted {
+                        self.intact[i] -= 1;
+                    }
                     if j as usize > i {
                         broken.push((i as u32, j));
                     }

@@ -666,24 +666,14 @@ impl GhostLayer {
 /// A model whose particles a ghost layer can cut out of every family: how a ghost whose
 /// source's family broke is dropped.
 pub trait Isolate {
-    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family:
-    /// their bonds become broken without counting as damage, every count recounted.
-    /// Idempotent.
-    fn isolate(&mut self, isolated: &[bool]);
-
-    /// Cuts the particles `newly` out of every family as [`Isolate::isolate`] would, when none
-    /// of them was cut before and no two of them are bonded (ghosts), touching only their
-    /// bonds.
-    fn isolate_new(&mut self, newly: &[u32]);
+    /// Cuts the passive particles `newly` (ghosts, none cut before) out of every family: their
+    /// bonds become broken, counted as damage at neither end.
+    fn isolate(&mut self, newly: &[u32]);
 }
 
 impl Isolate for ChenModel {
-    fn isolate(&mut self, isolated: &[bool]) {
-        ChenModel::isolate(self, isolated)
-    }
-
-    fn isolate_new(&mut self, newly: &[u32]) {
-        ChenModel::isolate_new(self, newly)
+    fn isolate(&mut self, newly: &[u32]) {
+        ChenModel::isolate(self, newly)
     }
 }
 
@@ -734,6 +724,14 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
                 got: inner.num_particles(),
             });
         }
+        // each extended row starts with the real row (what `Damage::copy_real` reads)
+        let (rf, ef) = (real.family(), layer.extended().family());
+        if let Some(i) = (0..real.len()).find(|&i| !ef.row(i).starts_with(rf.row(i))) {
+            return Err(PhysicsError::BadSetting(format!(
+                "the ghost layer was built over another discretisation: particle {i}'s family \
+                 differs"
+            )));
+        }
         let damage = inner.damage().map(|d| d.for_real(real.family()));
         Ok(Ghosted {
             inner,
@@ -768,6 +766,9 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
     /// whether any ghost was dropped (the forces of the check's pass then read its bonds).
     fn settle(&mut self, broken: &mut Vec<(u32, u32)>) -> bool {
         if self.broken.is_empty() {
+            if let Some(d) = self.damage.as_mut() {
+                d.clear_overshoot();
+            }
             return false;
         }
         let n = self.real.len();
@@ -789,7 +790,7 @@ impl<M: ForceModel + Isolate> Ghosted<M> {
         }
         let any = !self.newly.is_empty();
         if any {
-            self.inner.isolate_new(&self.newly);
+            self.inner.isolate(&self.newly);
         }
         self.sync_damage();
         any
@@ -903,6 +904,10 @@ impl<M: ForceModel + Isolate> ForceModel for Ghosted<M> {
             + self.real.memory_bytes()
             + self.layer.memory_bytes()
             + 24 * (self.y.len() + self.f.len())
+            + self.damage.as_ref().map_or(0, Damage::memory_bytes)
+            + self.dropped.len()
+            + 8 * self.broken.capacity()
+            + 4 * self.newly.capacity()
     }
 
     fn damage(&self) -> Option<&Damage> {
@@ -937,15 +942,11 @@ impl<M: ForceModel + Isolate> ForceModel for Ghosted<M> {
                 message: format!("flag {b} is neither kept (0) nor dropped (1)"),
             });
         }
+        // the inner state's bond states hold the drops (and a drop moves no count)
+        self.inner.restore_state(r)?;
         let n = self.real.len();
         for (slot, &b) in self.dropped[n..].iter_mut().zip(&dropped) {
             *slot = b == 1;
-        }
-        self.inner.restore_state(r)?;
-        // the inner state's bond states hold the drops; its counts need them told (and a
-        // state from before a drop the counts the drop changed)
-        if self.damage.is_some() {
-            self.inner.isolate(&self.dropped);
         }
         self.sync_damage();
         Ok(())

@@ -532,7 +532,7 @@ impl ChenModel {
             let alpha = (0..n)
                 .map(|i| mat(i).fracture.map_or(0.0, |f| f.alpha))
                 .collect();
-            Damage::new(fam, s_crit, alpha)
+            Damage::with_counted(fam, s_crit, alpha, active)
         });
         let ep = plastic.then(|| vec![[0.0; 2]; fam.num_bonds()]);
         let (first_pass, changed, ep_rows) = if plastic {
@@ -683,21 +683,13 @@ impl ChenModel {
         self.damage.as_ref()
     }
 
-    /// Cuts the particles flagged in `isolated` (one flag a particle) out of every family, as
-    /// a ghost layer drops a ghost whose source's family broke: their bonds become broken
-    /// without counting as damage ([`Damage::isolate`]). Nothing happens without fracture (no
-    /// bond can break, so no ghost is dropped).
-    pub(crate) fn isolate(&mut self, isolated: &[bool]) {
+    /// Cuts the passive particles `newly`, none cut before, out of every family, as a ghost
+    /// layer drops a ghost whose source's family broke: their bonds become broken, and count
+    /// towards no `phi` ([`Damage::isolate`]); only their rows and their reverses are touched.
+    /// Nothing happens without fracture (no bond can break, so no ghost is dropped).
+    pub(crate) fn isolate(&mut self, newly: &[u32]) {
         if let Some(d) = self.damage.as_mut() {
-            d.isolate(self.setup.disc.family(), isolated);
-        }
-    }
-
-    /// [`ChenModel::isolate`] for the particles `newly` alone, none isolated before nor bonded
-    /// to another of them: only their rows and their reverses are touched.
-    pub(crate) fn isolate_new(&mut self, newly: &[u32]) {
-        if let Some(d) = self.damage.as_mut() {
-            d.isolate_new(self.setup.disc.family(), newly);
+            d.isolate(self.setup.disc.family(), newly);
         }
     }
 
