@@ -497,17 +497,18 @@ impl GhostLayer {
             .filter(|&g| !found[g].1.is_empty())
             .collect();
         let m = kept.len();
+        // counted before any u32 index is made of them
+        let bonds = 2 * kept.iter().map(|&im| found[im].1.len()).sum::<usize>();
+        let total = fam.num_bonds().saturating_add(bonds);
+        if total > u32::MAX as usize || n + m > u32::MAX as usize {
+            return Err(PhysicsError::TooManyBonds(total));
+        }
         // per real particle, the ghosts in its family (ascending)
         let (ghost_offsets, ghost_rows) = csr(n, || {
             kept.iter()
                 .enumerate()
                 .flat_map(|(g, &im)| found[im].1.iter().map(move |&j| (j, (n + g) as u32)))
         });
-        let bonds = 2 * ghost_rows.len();
-        let total = fam.num_bonds() + bonds;
-        if total > u32::MAX as usize || n + m > u32::MAX as usize {
-            return Err(PhysicsError::TooManyBonds(total));
-        }
         let mut offsets = Vec::with_capacity(n + m + 1);
         let mut neighbours = Vec::with_capacity(total);
         offsets.push(0u32);
@@ -538,7 +539,11 @@ impl GhostLayer {
         // each real particle's ghosts in ghost order
         let mut combo_offsets = Vec::with_capacity(m + 1);
         combo_offsets.push(0u32);
-        let mut combo = Vec::with_capacity(kept.iter().map(|&im| images[im].terms.len()).sum());
+        let terms: usize = kept.iter().map(|&im| images[im].terms.len()).sum();
+        if terms > u32::MAX as usize {
+            return Err(PhysicsError::TooManyBonds(terms));
+        }
+        let mut combo = Vec::with_capacity(terms);
         let mut shift = Vec::with_capacity(m);
         let mut source = Vec::with_capacity(m);
         for &im in &kept {
