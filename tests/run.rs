@@ -524,3 +524,37 @@ fn small_pieces_are_written_as_debris_points() {
     assert_eq!(fa, kept);
     assert!(fb.len() > fa.len());
 }
+
+#[test]
+fn a_ghosted_run_reports_its_ghosts() {
+    // the tiny wall with ghosts, one frame: the setup prints the ghosts a particle and the
+    // ghost bonds a real one, and run.json keeps the count, bonds, gains, fallbacks and the
+    // bonds left out as too short
+    let tmp = tempfile::tempdir().unwrap();
+    let scene = tiny_wall(tmp.path());
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let ghosted = text.replace("[simulation]", "[simulation]\ncorrection = \"ghosts\"");
+    assert_ne!(ghosted, text);
+    std::fs::write(&scene, ghosted).unwrap();
+    let out = tmp.path().join("out");
+    let run = perifrac(&["run", s(&scene), "-o", s(&out), "--frames", "1"]);
+    assert!(run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("ghost particles across the boundary") && err.contains("a real one"),
+        "{err}"
+    );
+    let g = &manifest(&out)["correction"]["ghosts"];
+    let (count, bonds) = (g["count"].as_u64().unwrap(), g["bonds"].as_u64().unwrap());
+    // a slab two cells thick: every particle is within a horizon of a face, most of two
+    assert!(count > 0 && bonds > count, "{g}");
+    let largest = g["gain"]["max"].as_f64().unwrap();
+    assert!(
+        (1.0..=perifrac_physics::GHOST_GAIN_BOUND).contains(&largest),
+        "{g}"
+    );
+    assert!(
+        g["affine_fallbacks"].is_u64() && g["short_bonds"].is_u64(),
+        "{g}"
+    );
+}

@@ -210,9 +210,18 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
         );
         if let Some(g) = &info.ghosts {
             eprintln!(
-                "ghost particles across the boundary: {} ({} bonds), gain median {:.1}, 99% \
-                 under {:.1}, largest {:.1}",
-                g.ghosts, g.bonds, g.gain.median, g.gain.p99, g.gain.max
+                "ghost particles across the boundary: {} ({:.1} a particle; {} bonds, {:.2} a \
+                 real one), gain median {:.1}, 99% under {:.1}, largest {:.1} ({} quadratic fits \
+                 fell back to affine ones, {} bonds too short left out)",
+                g.ghosts,
+                g.ghosts as f64 / info.particles.max(1) as f64,
+                g.bonds,
+                g.bonds as f64 / info.bonds.max(1) as f64,
+                g.gain.median,
+                g.gain.p99,
+                g.gain.max,
+                g.affine_fallbacks,
+                g.short
             );
         }
         use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};

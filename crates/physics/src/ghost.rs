@@ -134,9 +134,12 @@ pub struct GhostReport {
     /// Images dropped because their source's family cannot fit even a gradient within
     /// [`GHOST_GAIN_BOUND`].
     pub unfitted: usize,
-    /// Free ghosts whose source fell back from the quadratic fit to the affine one (singular, or
-    /// past [`GHOST_GAIN_BOUND`]).
+    /// Ghosts kept whose quadratic fit fell back to the affine one (singular, or past the gain
+    /// bound; a clamped face's image of such a ghost counted too).
     pub affine_fallbacks: usize,
+    /// Bonds left out because a ghost lies closer to the real particle than
+    /// [`GHOST_SHORTEST_BOND`] of that particle's shortest real bond.
+    pub short: usize,
     /// Each ghost's gain, the sum of its combination's coefficients' magnitudes (1 for a copy
     /// of its source): how much it amplifies what it reads.
     pub gain: Spread,
@@ -163,13 +166,21 @@ pub struct GhostLayer {
     report: GhostReport,
 }
 
-/// The largest gain (the sum of a ghost's coefficients' magnitudes) a fit may take: a family
-/// that barely spans the fit's terms passes the Cholesky factorisation with a round-off pivot
-/// and would give enormous coefficients (and a collapsed stable step). Past it the quadratic
-/// fit falls back to the affine one and the affine one drops the image. Every fit measured is
-/// well under it: quadratic ghosts' largest gain 41.3 on a slab two cells thick, 33.9 on the
-/// 20 x 2 x 2 bar, affine ones' 6.2 at most on the bench's bars (NaN fails the test too).
-pub const GHOST_GAIN_BOUND: f64 = 100.0;
+/// The largest gain (the sum of a ghost's coefficients' magnitudes) a fit may take. Past it the
+/// quadratic fit falls back to the affine one and the affine one drops the image (NaN fails
+/// the test too). A ghost's bonds stiffen with its gain, so the bound keeps the stable step:
+/// at 100 the quadratic fit's few outliers shortened it to 0.17 to 0.73 of the fitted
+/// correction's on the shared meshes (0.03 on `bunny.mesh`, with the short bonds below), at 20
+/// it is 0.63 to 1.6 of it (docs/DECISIONS.md, "Ghosts on real meshes"). The bench's bars
+/// are barely touched: their quadratic gains have a median of 12 and the 40 x 4 x 4 bar's
+/// largest kept is 20.6; affine gains stay under 7 on boxes.
+pub const GHOST_GAIN_BOUND: f64 = 20.0;
+
+/// A ghost does not bond to a real particle it lies closer to than this fraction of that
+/// particle's shortest real bond: the image of a particle a sliver's width under the surface
+/// lands beside it, and a bond that short (its stiffness grows as `1 / r^3`) set a stable step
+/// 30 times shorter than the fitted correction's on `bunny.mesh` (docs/DECISIONS.md).
+pub const GHOST_SHORTEST_BOND: f64 = 0.5;
 
 /// Number of basis terms of the quadratic fit: `x, y, z, x^2/2, y^2/2, z^2/2, xy, xz, yz`.
 const TERMS: usize = 9;
@@ -202,6 +213,7 @@ fn fitted_terms(
     p: usize,
     at: Vec3,
     fit: GhostFit,
+    gain_bound: f64,
 ) -> Option<Vec<(u32, f64)>> {
     let (fam, x, vol) = (disc.family(), disc.rest_positions(), disc.volumes());
     let delta = disc.horizon();
@@ -238,7 +250,17 @@ fn fitted_terms(
     terms.push((p as u32, own));
     terms.sort_unstable_by_key(|t| t.0);
     let gain: f64 = terms.iter().map(|t| t.1.abs()).sum();
-    (gain <= GHOST_GAIN_BOUND).then_some(terms)
+    (gain <= gain_bound).then_some(terms)
+}
+
+/// Bonds left out as too short, over the images that keep some (an image left with none is
+/// counted as unbonded instead).
+fn kept_short(found: &[(Vec3, Vec<u32>, usize)]) -> usize {
+    found
+        .iter()
+        .filter(|f| !f.1.is_empty())
+        .map(|f| 2 * f.2)
+        .sum()
 }
 
 /// `s + sum c y_k` over `terms`, in their order (the same arithmetic at rest and in motion,
@@ -327,6 +349,8 @@ struct Image {
     source: u32,
     shift: Vec3,
     terms: Terms,
+    /// Whether its quadratic fit fell back to the affine one.
+    fell_back: bool,
 }
 
 impl GhostLayer {
@@ -358,6 +382,17 @@ impl GhostLayer {
         disc: &Discretization,
         faces: &dyn GhostFaces,
         fit: GhostFit,
+    ) -> Result<GhostLayer, PhysicsError> {
+        Self::build_bounded(disc, faces, fit, GHOST_GAIN_BOUND)
+    }
+
+    /// [`GhostLayer::build_with`] with another bound on the fits' gains than
+    /// [`GHOST_GAIN_BOUND`] (a study's, or a test's that wants every fit kept).
+    pub fn build_bounded(
+        disc: &Discretization,
+        faces: &dyn GhostFaces,
+        fit: GhostFit,
+        gain_bound: f64,
     ) -> Result<GhostLayer, PhysicsError> {
         let n = disc.len();
         let delta = disc.horizon();
@@ -401,23 +436,22 @@ impl GhostLayer {
             .par_iter()
             .map(|&(p, at)| {
                 let p = p as usize;
-                match fitted_terms(disc, p, at, fit) {
+                match fitted_terms(disc, p, at, fit, gain_bound) {
                     Some(t) => Some((t, false)),
                     None if fit == GhostFit::Quadratic => {
-                        fitted_terms(disc, p, at, GhostFit::Affine).map(|t| (t, true))
+                        fitted_terms(disc, p, at, GhostFit::Affine, gain_bound).map(|t| (t, true))
                     }
                     None => None,
                 }
             })
             .collect();
-        let (mut unfitted, mut affine_fallbacks) = (0, 0);
+        let mut unfitted = 0;
         let mut images = Vec::with_capacity(sets.len());
         for (&(source, at), f) in sets.iter().zip(fitted) {
             let Some((terms, fell_back)) = f else {
                 unfitted += 1;
                 continue;
             };
-            affine_fallbacks += usize::from(fell_back);
             // s = X_g - sum c X_k: zero to round-off for an exact fit, kept so that the rest
             // position is the one the map gives
             let shift = sub(at, combine([0.0; 3], &terms, x));
@@ -426,6 +460,7 @@ impl GhostLayer {
                 source,
                 shift,
                 terms,
+                fell_back,
             });
         }
         // clamped faces: real particles and free ghosts within a horizon, each moving as
@@ -439,6 +474,7 @@ impl GhostLayer {
                     source: i as u32,
                     shift: add(at, xi),
                     terms: vec![(i as u32, -1.0)],
+                    fell_back: false,
                 });
             }
         }
@@ -452,12 +488,13 @@ impl GhostLayer {
                         source: g.source,
                         shift: add(at, sub(g.at, g.shift)),
                         terms: g.terms.iter().map(|&(k, c)| (k, -c)).collect(),
+                        fell_back: g.fell_back,
                     });
                 }
             }
         }
         images.extend(clamp_images);
-        Self::bond(disc, images, unfitted, affine_fallbacks)
+        Self::bond(disc, images, unfitted)
     }
 
     /// Finds each image's real neighbours, drops the unbonded, and builds the layer.
@@ -465,37 +502,53 @@ impl GhostLayer {
         disc: &Discretization,
         mut images: Vec<Image>,
         unfitted: usize,
-        affine_fallbacks: usize,
     ) -> Result<GhostLayer, PhysicsError> {
         let n = disc.len();
         let delta = disc.horizon();
         let x = disc.rest_positions();
         let fam = disc.family();
         let h2 = delta * delta;
+        // per real particle, the square of the shortest ghost bond it takes
+        let mut least = vec![0.0; n];
+        map_particles(&mut least, |i| {
+            let r = fam.rest_lengths()[fam.range(i)]
+                .iter()
+                .fold(f64::INFINITY, |a, &b| a.min(b));
+            (GHOST_SHORTEST_BOND * r).powi(2)
+        });
         // each image's rest position as its map gives it, and its real neighbours, sorted:
         // those within a horizon of it among its source and the source's family. Across a
         // flat face (and across orthogonal ones together) every real particle within a
         // horizon of an image is within one of its source, so this only leaves out bonds
         // that would cross what the families do not (a crack, a slot, a reentrant corner)
-        let found: Vec<(Vec3, Vec<u32>)> = images
+        let found: Vec<(Vec3, Vec<u32>, usize)> = images
             .par_iter()
             .map(|g| {
                 let at = combine(g.shift, &g.terms, x);
+                let mut short = 0;
                 let mut near: Vec<u32> = fam
                     .row(g.source as usize)
                     .iter()
                     .copied()
                     .chain([g.source])
-                    .filter(|&j| norm_squared(sub(x[j as usize], at)) < h2)
+                    .filter(|&j| {
+                        let r2 = norm_squared(sub(x[j as usize], at));
+                        let keep = r2 >= least[j as usize];
+                        short += usize::from(r2 < h2 && !keep);
+                        r2 < h2 && keep
+                    })
                     .collect();
                 near.sort_unstable();
-                (at, near)
+                (at, near, short)
             })
             .collect();
+        drop(least);
         let unbonded = found.iter().filter(|f| f.1.is_empty()).count();
+        let short = kept_short(&found);
         let kept: Vec<usize> = (0..images.len())
             .filter(|&g| !found[g].1.is_empty())
             .collect();
+        let affine_fallbacks = kept.iter().filter(|&&im| images[im].fell_back).count();
         let m = kept.len();
         // counted before any u32 index is made of them
         let bonds = 2 * kept.iter().map(|&im| found[im].1.len()).sum::<usize>();
@@ -576,6 +629,7 @@ impl GhostLayer {
             unbonded,
             unfitted,
             affine_fallbacks,
+            short,
             gain: Spread::of(gains),
         };
         Ok(GhostLayer {

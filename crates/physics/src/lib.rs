@@ -51,6 +51,7 @@ pub use family::{Family, FamilyReport, NO_NEIGHBOUR};
 pub use fracture::Damage;
 pub use ghost::{
     FaceKind, GhostFaces, GhostFit, GhostLayer, GhostPlane, GhostReport, Ghosted, GHOST_GAIN_BOUND,
+    GHOST_SHORTEST_BOND,
 };
 pub use integrate::{
     EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,

@@ -123,6 +123,16 @@ pub struct CorrectionJson {
 pub struct GhostsJson {
     /// Ghosts kept.
     pub count: usize,
+    /// Directed bonds between real particles and ghosts.
+    #[serde(default)]
+    pub bonds: usize,
+    /// Ghosts whose quadratic fit fell back to the affine one (past the gain bound).
+    #[serde(default)]
+    pub affine_fallbacks: usize,
+    /// Bonds left out because the ghost lay closer to the real particle than half its shortest
+    /// real bond.
+    #[serde(default)]
+    pub short_bonds: usize,
     /// Each ghost's gain: the sum of its combination's coefficients' magnitudes (1: a copy of
     /// its source).
     pub gain: SpreadJson,
@@ -361,6 +371,9 @@ impl FrameWriter {
                 deviatoric: c.deviatoric.into(),
                 ghosts: info.ghosts.as_ref().map(|g| GhostsJson {
                     count: g.ghosts,
+                    bonds: g.bonds,
+                    affine_fallbacks: g.affine_fallbacks,
+                    short_bonds: g.short,
                     gain: g.gain.into(),
                 }),
             }),

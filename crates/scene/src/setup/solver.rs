@@ -222,12 +222,9 @@ pub(super) fn model(
                 return ghosted(ctx, sim, disc, mesh, m.as_slice(), options, check);
             }
             let model = ChenModel::with_options(disc, m, options).map_err(physics)?;
-            let model = match sim.inversion_guard {
+            let model = match guard_factor(ctx, sim)? {
                 None => model,
-                Some(f) => {
-                    let f = ctx.positive("simulation.inversion_guard", f, "")?;
-                    model.with_inversion_guard(f).map_err(physics)?
-                }
+                Some(f) => model.with_inversion_guard(f).map_err(physics)?,
             };
             Ok(AnyModel::Chen(Box::new(model)))
         }
@@ -255,10 +252,7 @@ pub(super) fn model(
                     ))
                 }
             };
-            let inversion_guard = match sim.inversion_guard {
-                None => None,
-                Some(f) => Some(ctx.positive("simulation.inversion_guard", f, "")?),
-            };
+            let inversion_guard = guard_factor(ctx, sim)?;
             let options = XuOptions {
                 kernel,
                 inversion_guard,
@@ -292,10 +286,7 @@ fn ghosted(
             ))
         }
     };
-    let guard = match sim.inversion_guard {
-        None => None,
-        Some(f) => Some(ctx.positive("simulation.inversion_guard", f, "")?),
-    };
+    let guard = guard_factor(ctx, sim)?;
     let physics = |cause: PhysicsError| ctx.physics(cause);
     let faces = MeshFaces(BoundaryPlanes::new(mesh, disc.horizon()));
     let layer = GhostLayer::build_with(&disc, &faces, fit).map_err(physics)?;
@@ -309,6 +300,14 @@ fn ghosted(
     };
     let model = Ghosted::new(disc, layer, inner).map_err(physics)?;
     Ok(AnyModel::ChenGhosts(Box::new(model)))
+}
+
+/// `simulation.inversion_guard`, the factor on each bond's rest stiffness, checked positive
+/// (absent: no guard).
+fn guard_factor(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>, SceneError> {
+    sim.inversion_guard
+        .map(|f| ctx.positive("simulation.inversion_guard", f, ""))
+        .transpose()
 }
 
 /// The event search's settings from `[simulation]`, each checked.
