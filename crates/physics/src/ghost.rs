@@ -131,8 +131,8 @@ pub struct GhostReport {
     /// Images dropped because no real particle lies within a horizon of them among their
     /// source and its family.
     pub unbonded: usize,
-    /// Images dropped because their source's family cannot fit even a gradient within
-    /// [`GHOST_GAIN_BOUND`].
+    /// Images dropped because their source's family cannot fit even a gradient within the
+    /// gain bound ([`GHOST_GAIN_BOUND`] unless built with another).
     pub unfitted: usize,
     /// Ghosts kept whose quadratic fit fell back to the affine one (singular, or past the gain
     /// bound; a clamped face's image of such a ghost counted too).
@@ -169,11 +169,11 @@ pub struct GhostLayer {
 /// The largest gain (the sum of a ghost's coefficients' magnitudes) a fit may take. Past it the
 /// quadratic fit falls back to the affine one and the affine one drops the image (NaN fails
 /// the test too). A ghost's bonds stiffen with its gain, so the bound keeps the stable step:
-/// at 100 the quadratic fit's few outliers shortened it to 0.17 to 0.73 of the fitted
+/// at 100 the quadratic fit's few outliers shortened it to 0.17 to 0.84 of the fitted
 /// correction's on the shared meshes (0.03 on `bunny.mesh`, with the short bonds below), at 20
 /// it is 0.63 to 1.6 of it (docs/DECISIONS.md, "Ghosts on real meshes"). The bench's bars
-/// are barely touched: their quadratic gains have a median of 12 and the 40 x 4 x 4 bar's
-/// largest kept is 20.6; affine gains stay under 7 on boxes.
+/// are barely touched: their quadratic gains have a median of 10 to 12, the largest kept
+/// was 20.6 from 30 x 3 x 3 cells up; affine gains stay under 7 on boxes.
 pub const GHOST_GAIN_BOUND: f64 = 20.0;
 
 /// A ghost does not bond to a real particle it lies closer to than this fraction of that
