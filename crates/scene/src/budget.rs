@@ -220,9 +220,7 @@ impl WorkEstimate {
             ..self
         }
     }
-}
 
-impl WorkEstimate {
     /// The same run with a ghost layer of `ghosts` ghosts, `bonds` directed bonds to real
     /// particles and `layer_bytes` of its own (its maps and the extended discretisation the
     /// model copies): the ghosts' bonds walk the loops as the real ones do, and the ghosts

@@ -182,6 +182,16 @@ impl RestStiffness for ChenStiffness<'_> {
     }
 }
 
+/// `f(i)` for the particles before `active`, `[0, 0]` for the passive ones after: their
+/// dilatation meets only their zero constants, so it is not computed.
+#[inline(always)]
+fn active_only<F>(active: usize, f: F) -> impl Fn(usize) -> [f64; 2] + Sync
+where
+    F: Fn(usize) -> [f64; 2] + Sync,
+{
+    move |i| if i < active { f(i) } else { [0.0; 2] }
+}
+
 /// Particle `i`'s discrete family moments `(sum_j omega r V_j, sum_j omega r^2 V_j)` over its
 /// rest bonds, with the per-bond weights `w` when given (`delta / r` otherwise).
 fn family_moments(disc: &Discretization, w: Option<&[f64]>, i: usize) -> (f64, f64) {
@@ -714,38 +724,37 @@ impl ChenModel {
         }
         let s = &self.setup;
         let inp = s.inputs(y);
-        // a passive particle's dilatation is multiplied by its zero constants: not computed
         let active = s.active;
         if let Some(row) = s.lane_row(&self.packed).filter(|_| self.ep.is_none()) {
             let moment = s.options.energy_consistent;
             let (fam, c) = (s.disc.family(), &s.c_theta);
             let alive = self.damage.as_ref().map(Damage::bond_state);
-            map_particles(&mut self.ts, |i| {
-                if i >= active {
-                    return [0.0; 2];
-                }
-                let (sums, _) = row.dilatation(i, alive.map(|a| &a[fam.range(i)]));
-                theta_moment(c[i], sums, moment).into()
-            });
+            map_particles(
+                &mut self.ts,
+                active_only(active, |i| {
+                    let (sums, _) = row.dilatation(i, alive.map(|a| &a[fam.range(i)]));
+                    theta_moment(c[i], sums, moment).into()
+                }),
+            );
             self.pressure_pass();
             return;
         }
         with_wpd!(s, self.ep.as_deref(), self.damage.as_ref(), |w, p, d| {
             let ts = &mut self.ts;
             if s.options.energy_consistent {
-                map_particles(ts, |i| {
-                    if i >= active {
-                        return [0.0; 2];
-                    }
-                    dilatation::<_, _, _, true>(inp, w, p, d, i).into()
-                })
+                map_particles(
+                    ts,
+                    active_only(active, |i| {
+                        dilatation::<_, _, _, true>(inp, w, p, d, i).into()
+                    }),
+                )
             } else {
-                map_particles(ts, |i| {
-                    if i >= active {
-                        return [0.0; 2];
-                    }
-                    dilatation::<_, _, _, false>(inp, w, p, d, i).into()
-                })
+                map_particles(
+                    ts,
+                    active_only(active, |i| {
+                        dilatation::<_, _, _, false>(inp, w, p, d, i).into()
+                    }),
+                )
             }
         });
         self.pressure_pass();

@@ -332,9 +332,9 @@ impl Setup {
         times.model = stage.elapsed();
         let correction = model.correction();
         let ghosts = model.ghosts();
-        let mut estimate = match (&ghosts, model.ghost_layer_bytes()) {
-            (Some(g), bytes) => with_ghosts(g, bytes),
-            (None, _) => counted,
+        let mut estimate = match &ghosts {
+            Some(g) => with_ghosts(g, model.ghost_layer_bytes()),
+            None => counted,
         };
 
         let radii = radii::contact_radii(&mesh, &volumes, sim.contact_radius.unwrap_or(1.0));
