@@ -200,7 +200,14 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
             perifrac_scene::memo::CACHE_ENV
         );
     }
-    if let Some(c) = &info.correction {
+    if let (Some(c), "xu") = (&info.correction, info.model) {
+        let d = c.dilatation;
+        eprintln!(
+            "correction of Xu's normalised dilatation weights (fitted): x{:.3} to x{:.3} (median \
+             {:.3}, 99% under {:.3} in magnitude)",
+            d.min, d.max, d.median, d.p99
+        );
+    } else if let Some(c) = &info.correction {
         let (d, b) = (c.dilatation, c.deviatoric);
         eprintln!(
             "correction of MODEL.md's constants: dilatation weights x{:.3} to x{:.3} (median \

@@ -77,8 +77,10 @@ fn large_implicit_steps_reach_the_damped_explicit_equilibrium() {
     // critical for the first bending mode (12/s; about 6 rad/s) run for 10 s to rest, against
     // implicit steps of 1 s, each a near-static solve (the first five stop at the 400
     // iteration cap: bending with a matrix that resists rotation converges slowly, and the
-    // next step goes on from there). Measured gap 2.5e-8 m after 8 steps (3.6e-5 m after 4,
-    // with the explicit run at 6 s).
+    // next step goes on from there). Measured gap 7.5e-8 m after 8 steps with the fitted
+    // dilatation (2.5e-8 m with the normalised weights; 3.6e-5 m after 4, with the explicit run
+    // at 6 s). A tolerance of 1e-9: at 1e-10 the fitted model's line search meets the energy's
+    // rounding (a predicted decrease of 2.4e-10 J against 28 J) and the step reports a stall.
     let m = bar(Curve::NeoHookean, None);
     let x = m.discretization().rest_positions().to_vec();
     let delta = m.discretization().horizon();
@@ -93,7 +95,7 @@ fn large_implicit_steps_reach_the_damped_explicit_equilibrium() {
         e.step().unwrap();
     }
     let config = ImplicitConfig {
-        tolerance: 1e-10,
+        tolerance: 1e-9,
         max_iterations: 400,
         ..ImplicitConfig::with_dt(1.0)
     };

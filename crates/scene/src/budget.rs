@@ -24,7 +24,8 @@ pub const BYTES_PER_VERTEX: u64 = 100;
 
 /// Bytes per directed bond at the peak: the family build's per-particle rows (4 B, up to twice
 /// that while they grow) next to the final neighbour list (4 B) and rest lengths (8 B), the
-/// fitted dilatation's pair of weights (16 B, and a 4 B reverse index while they are made) and
+/// fitted dilatation's pair of weights (16 B, and a 4 B reverse index while they are made; Xu's
+/// keeps its reverse index) and
 /// the model's bond state (damage, plastic extensions: up to 17 B). BENCHMARKS.md measures
 /// 28.8 B per bond for the default elastic model and 46.4 for a ductile one once built, so
 /// this over-estimates by 1.2x to 2x.

@@ -105,8 +105,9 @@ impl From<perifrac_physics::Spread> for SpreadJson {
     }
 }
 
-/// Chen's correction factors in `run.json`, per particle: the largest on its dilatation
-/// weights, and on `b`.
+/// The correction factors in `run.json`, per particle: the largest on its dilatation
+/// weights, and Chen's on `b` (Xu's fitted dilatation: its factors over the normalised weights,
+/// and 1 for the bond term, whose weights stay normalised).
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 pub struct CorrectionJson {
     /// Dilatation weights over MODEL.md's: each particle's of largest magnitude.

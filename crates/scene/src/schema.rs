@@ -182,7 +182,9 @@ pub struct SimulationSpec {
     /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle), `"none"`
     /// (MODEL.md's constants) or `"ghosts"` (the fitted correction over families completed by
     /// ghost particles mirrored across the mesh's boundary; with fracture a ghost is dropped
-    /// once its source's family loses a bond).
+    /// once its source's family loses a bond). Xu: `"fitted"` (default: the dilatation's
+    /// weights fitted per particle, back on the normalised ones once it loses a bond) or
+    /// `"none"` (the normalised weights).
     pub correction: Option<String>,
     /// Chen with `correction = "ghosts"`: how a ghost extrapolates its source's displacement,
     /// `"quadratic"` (default) or `"affine"`.

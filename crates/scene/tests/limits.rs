@@ -416,13 +416,29 @@ fn the_correction_key_is_checked_and_reported() {
         e.contains("simulation.correction") && e.contains("\"fitted\""),
         "{e}"
     );
-    let xu = with("correction = \"fitted\"")
-        .replace("density = 1000.0", "density = 1000.0\nmodel = \"xu\"");
-    let e = refusal(&xu).to_string();
-    assert!(
-        e.contains("simulation.correction") && e.contains("Chen"),
-        "{e}"
-    );
+    // Xu's model takes its own fit, or none; ghosts and the scalar calibration are Chen's
+    let xu = |c: &str| {
+        with(&format!("correction = \"{c}\""))
+            .replace("density = 1000.0", "density = 1000.0\nmodel = \"xu\"")
+    };
+    for c in ["ghosts", "calibrated"] {
+        let e = refusal(&xu(c)).to_string();
+        assert!(
+            e.contains("simulation.correction") && e.contains("Chen"),
+            "{e}"
+        );
+    }
+    let fitted = Setup::with_limits(&scene(&xu("fitted")), None, &limits()).unwrap();
+    let c = fitted
+        .info
+        .correction
+        .expect("Xu's fit reports its factors");
+    // every particle of a 2-cell cube is a corner or edge one: its largest factor passes 1;
+    // the bond term keeps its normalised weights
+    assert!(c.dilatation.min > 1.0 && c.dilatation.max <= 10.0, "{c:?}");
+    assert_eq!((c.deviatoric.min, c.deviatoric.max), (1.0, 1.0));
+    let plain = Setup::with_limits(&scene(&xu("none")), None, &limits()).unwrap();
+    assert!(plain.info.correction.is_none());
     // MODEL.md's constants: every factor is 1
     let none = Setup::with_limits(&scene(&with("correction = \"none\"")), None, &limits()).unwrap();
     let c = none

@@ -8,7 +8,7 @@ use crate::ForceModel;
 use perifrac_topology::primitives::box_data;
 use perifrac_topology::TetMesh;
 
-fn xu_block(cells: [usize; 3], h: Curve) -> XuModel {
+fn xu_block(cells: [usize; 3], h: Curve, options: XuOptions) -> XuModel {
     let size = cells.map(|c| c as f64 * 0.01);
     let (v, t) = box_data([0.0; 3], size, cells);
     let (mesh, _) = TetMesh::new(v, t).unwrap();
@@ -21,7 +21,7 @@ fn xu_block(cells: [usize; 3], h: Curve) -> XuModel {
     .unwrap();
     let mat = XuMaterial::from_young_poisson(1e5, 0.3, 1000.0, h.clone(), h, XuModuli::Consistent)
         .unwrap();
-    XuModel::new(disc, &[mat], XuOptions::default()).unwrap()
+    XuModel::new(disc, &[mat], options).unwrap()
 }
 
 /// `(S (x) I_3, H)` at rest, both `3n x 3n` row-major: `S` as assembled for `dt`, `H` the
@@ -81,10 +81,15 @@ fn eigenvalues(a: &[f64], m: usize) -> Vec<f64> {
 /// coupling of a particle's whole family is replaced by its pairwise Cauchy-Schwarz bound
 /// (`(sum_j w V a_j)^2 <= sum_j w V a_j^2` with `sum_j w V = 1`). So `S` agrees with `H` on the
 /// mass, is exact on uniform translations, and overestimates every other curvature: a step
-/// with `S` never overshoots at rest.
+/// with `S` never overshoots at rest. (With the normalised weights; the fitted dilatation keeps
+/// the same `S`, below.)
 #[test]
 fn step_matrix_is_spd_and_bounds_the_rest_hessian() {
-    let mut model = xu_block([3, 2, 2], Curve::NeoHookean);
+    let options = XuOptions {
+        fitted_dilatation: false,
+        ..XuOptions::default()
+    };
+    let mut model = xu_block([3, 2, 2], Curve::NeoHookean, options);
     let n = model.num_particles();
     let m = 3 * n;
     for dt in [1e-3, 1e-1] {
@@ -128,6 +133,31 @@ fn step_matrix_is_spd_and_bounds_the_rest_hessian() {
     }
 }
 
+/// The fitted dilatation keeps the normalised weights' `S` bit for bit (a preconditioner
+/// measured faster than the springs that bound the fitted Hessian; docs/DECISIONS.md), so `S`
+/// stays symmetric positive definite while its corner families' fitted curvature can pass it.
+#[test]
+fn the_fitted_dilatation_keeps_the_step_matrix() {
+    let plain = XuOptions {
+        fitted_dilatation: false,
+        ..XuOptions::default()
+    };
+    let fitted = XuOptions {
+        fitted_dilatation: true,
+        ..plain
+    };
+    let mut a = xu_block([3, 2, 2], Curve::NeoHookean, plain);
+    let mut b = xu_block([3, 2, 2], Curve::NeoHookean, fitted);
+    let m = 3 * a.num_particles();
+    let (sa, _) = matrices(&mut a, 1e-3);
+    let (sb, hb) = matrices(&mut b, 1e-3);
+    assert!(sa.iter().zip(&sb).all(|(x, y)| x.to_bits() == y.to_bits()));
+    let diff: Vec<f64> = sb.iter().zip(&hb).map(|(s, h)| s - h).collect();
+    let ev = eigenvalues(&diff, m);
+    let top = eigenvalues(&sb, m).into_iter().fold(0.0, f64::max);
+    eprintln!("fitted: eig (S - H) min {:e} of eig S max {top:e}", ev[0]);
+}
+
 /// An environment that pushes particle 0 at the predictor but whose potential is not finite
 /// anywhere else: the line search can never accept, and the step reports it.
 struct Poisoned(Option<Vec3>);
@@ -166,7 +196,7 @@ impl ImplicitEnvironment for Poisoned {
 
 #[test]
 fn a_step_that_cannot_decrease_phi_is_an_error_and_a_failed_factor_too() {
-    let model = xu_block([2, 2, 2], Curve::Linear);
+    let model = xu_block([2, 2, 2], Curve::Linear, XuOptions::default());
     let x = model.discretization().rest_positions().to_vec();
     let n = x.len();
     let loads = Loads::new(n).with_gravity([0.0, 0.0, -9.81]);
@@ -180,7 +210,7 @@ fn a_step_that_cannot_decrease_phi_is_an_error_and_a_failed_factor_too() {
     let e = sim.step_in(&mut nan).unwrap_err();
     assert!(matches!(e, PhysicsError::NotFinite { .. }), "{e}");
     // a step matrix with a negative pair stiffness is not positive definite: a clear error
-    let model = xu_block([2, 2, 2], Curve::Linear);
+    let model = xu_block([2, 2, 2], Curve::Linear, XuOptions::default());
     let family = model.discretization().family();
     let mut m = StepMatrix::new(family, &vec![false; n]).unwrap();
     let pair = vec![-1.0; family.num_bonds()];

@@ -32,7 +32,7 @@ use super::lanes::{self, wide};
 /// Mandel components of `n n` (`n` unit): `n n : L = q(n) . l` with `l` the Mandel vector of
 /// `L`.
 #[inline]
-fn mandel(n: Vec3) -> [f64; 6] {
+pub(crate) fn mandel(n: Vec3) -> [f64; 6] {
     let s = std::f64::consts::SQRT_2;
     [
         n[0] * n[0],

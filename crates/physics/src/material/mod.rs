@@ -8,6 +8,7 @@ pub(crate) mod kernel;
 pub(crate) mod lanes;
 pub mod params;
 pub mod xu;
+mod xu_fit;
 pub(crate) mod xu_kernel;
 pub mod xu_params;
 

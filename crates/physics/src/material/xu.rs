@@ -4,11 +4,13 @@
 //! optional inversion guard (`material/guard.rs`).
 
 use super::basis::Curve;
+use super::fit::Spread;
 use super::guard::{Guard, RestStiffness};
 use super::kernel::{AllAlive, Mask, NoPlastic};
+use super::xu_fit::{FitInputs, XuFit};
 use super::xu_kernel::{
-    bond_energy_sum, dilatation_sum, force, force_and_energy, LinearH, NeoHookeanH, PerParticleH,
-    Stored, StvkH, Unit, XuInputs,
+    bond_energy_sum, dilatation_sum, fitted_dilatation_sum, force, force_and_energy, Fitted,
+    LinearH, NeoHookeanH, Normalised, PerParticleH, Stored, StvkH, Unit, XuInputs,
 };
 use super::{same_features, ForceModel, QuasiNewtonModel, XuMaterial};
 use crate::error::PhysicsError;
@@ -42,13 +44,30 @@ impl XuKernelShape {
 }
 
 /// Choices of Xu's model fixed at setup.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct XuOptions {
     /// The influence function.
     pub kernel: XuKernelShape,
     /// The inversion guard's factor on the rest bond stiffness (MODEL.md section 5), `None`:
     /// no guard.
     pub inversion_guard: Option<f64>,
+    /// Reads the dilatation through per-bond weights fitted so that every uniform small strain
+    /// gives `theta - 1 = tr(eps) / 3` on every particle, surfaces, edges and corners included
+    /// (`material/xu_fit.rs`; a particle that loses a bond goes back on the normalised
+    /// weights); off, through the normalised weights, which read a shear on a family cut
+    /// unevenly as a volume change. On by default.
+    pub fitted_dilatation: bool,
+}
+
+impl Default for XuOptions {
+    /// The constant kernel, no guard, the fitted dilatation.
+    fn default() -> Self {
+        XuOptions {
+            kernel: XuKernelShape::Constant,
+            inversion_guard: None,
+            fitted_dilatation: true,
+        }
+    }
 }
 
 /// What is fixed at setup.
@@ -94,6 +113,26 @@ pub struct XuModel {
     pq: Vec<[f64; 2]>,
     scratch: Vec<f64>,
     guard: Option<Guard>,
+    /// The fitted dilatation's weights, with `XuOptions::fitted_dilatation`.
+    fit: Option<XuFit>,
+    /// A row of weights while a particle goes back on the normalised ones.
+    fit_row: Vec<f64>,
+}
+
+/// Binds `$p` to the pressure weights (fitted or normalised), then as [`with_hgd`].
+macro_rules! with_hgdp {
+    ($s:expr, $fit:expr, $damage:expr, |$h:ident, $g:ident, $d:ident, $p:ident| $body:expr) => {
+        match $fit {
+            None => {
+                let $p = Normalised;
+                with_hgd!($s, $damage, |$h, $g, $d| $body)
+            }
+            Some(fit) => {
+                let $p = Fitted { pairs: fit.pairs() };
+                with_hgd!($s, $damage, |$h, $g, $d| $body)
+            }
+        }
+    };
 }
 
 /// Binds `$h` (bond curve), `$g` (kernel) and `$d` (damage mask) to concrete types and expands
@@ -229,9 +268,33 @@ impl XuModel {
             guard: options.inversion_guard.map(|f| Guard::new(n, f)),
             damage,
             setup,
+            fit: None,
+            fit_row: Vec::new(),
         };
         model.normalise(None);
+        if options.fitted_dilatation {
+            model.fit = Some(XuFit::new(model.fit_inputs()));
+        }
         Ok(model)
+    }
+
+    /// What the fit reads.
+    fn fit_inputs(&self) -> FitInputs<'_> {
+        let s = &self.setup;
+        FitInputs {
+            family: s.disc.family(),
+            x: s.disc.rest_positions(),
+            volumes: s.disc.volumes(),
+            wr: &s.wr,
+            inv_norm: &self.inv_norm,
+            alive: self.damage.as_ref().map(|d| d.bond_state()),
+        }
+    }
+
+    /// With the fitted dilatation, per particle its fitted weight over the normalised one of
+    /// largest magnitude on its bonds at setup (1: Xu's normalised weights).
+    pub fn correction(&self) -> Option<Spread> {
+        self.fit.as_ref().map(XuFit::correction)
     }
 
     /// The options chosen at setup.
@@ -280,11 +343,21 @@ impl XuModel {
     fn dilatation_pass(&mut self, y: &[Vec3]) {
         let inp = self.setup.inputs(y);
         let inv = &self.inv_norm;
-        match self.damage.as_ref() {
-            None => map_particles(&mut self.theta, |i| {
+        match (self.damage.as_ref(), &self.fit) {
+            // theta = 1 + inv sum f V (l - r): 1 at rest and without intact bonds
+            (None, Some(fit)) => map_particles(&mut self.theta, |i| {
+                1.0 + inv[i] * fitted_dilatation_sum(inp, fit.pairs(), AllAlive, i)
+            }),
+            (Some(dm), Some(fit)) => {
+                let d = Mask(dm.bond_state());
+                map_particles(&mut self.theta, |i| {
+                    1.0 + inv[i] * fitted_dilatation_sum(inp, fit.pairs(), d, i)
+                })
+            }
+            (None, None) => map_particles(&mut self.theta, |i| {
                 theta_of(inv[i], dilatation_sum(inp, AllAlive, i))
             }),
-            Some(dm) => {
+            (Some(dm), None) => {
                 let d = Mask(dm.bond_state());
                 map_particles(&mut self.theta, |i| {
                     theta_of(inv[i], dilatation_sum(inp, d, i))
@@ -303,8 +376,8 @@ impl XuModel {
         let inp = self.setup.inputs(y);
         let pq = &self.pq;
         let s = &self.setup;
-        with_hgd!(s, self.damage.as_ref(), |h, g, d| {
-            map_particles(forces, |i| force(inp, h, g, d, pq, i))
+        with_hgdp!(s, &self.fit, self.damage.as_ref(), |h, g, d, p| {
+            map_particles(forces, |i| force(inp, (h, g, d, p), pq, i))
         });
         if let Some(guard) = &self.guard {
             guard.add_forces(&self.guard_inputs(y), forces);
@@ -325,32 +398,59 @@ impl XuModel {
     }
 
     /// Rest stiffness `k_ij = V_i V_j (w_ij / r^2)(lambda_i g_i''(1) + mu_i G_ij h_i''(1))`
-    /// (N/m) of directed bond `k` of particle `i` (intact or not).
+    /// (N/m) of directed bond `k` of particle `i` (intact or not), from the normalised weights
+    /// `w` whether or not the dilatation is fitted: the step matrix's springs (with the fit
+    /// they no longer bound its corner families' Hessian; docs/DECISIONS.md, "The fitted
+    /// dilatation in Xu's model").
     #[inline]
     pub fn rest_bond_stiffness(&self, i: usize, k: usize) -> f64 {
-        let s = &self.setup;
-        let j = s.disc.family().neighbours()[k] as usize;
-        let gij = s.kernel.as_ref().map_or(1.0, |(own, _)| own[k]);
-        self.stiffness_from(i, j, k, gij)
+        self.pair_stiffness(i, k, false)[0]
     }
 
     /// `k_ji` (N/m) of the reverse of directed bond `k` of particle `i`.
     #[inline]
     pub fn reverse_bond_stiffness(&self, i: usize, k: usize) -> f64 {
-        let s = &self.setup;
-        let j = s.disc.family().neighbours()[k] as usize;
-        let gji = s.kernel.as_ref().map_or(1.0, |(_, other)| other[k]);
-        self.stiffness_from(j, i, k, gji)
+        self.pair_stiffness(i, k, false)[1]
     }
 
-    /// `k` seen from `owner` across bond `k` (whose rest length and `wr` both ends share).
+    /// `[k_ij, k_ji]` (N/m) of directed bond `k` of particle `i`; with `bound` and the fitted
+    /// dilatation, the dilatation term's spring `V_i V_j lambda_i g_i''(1) S_i |d_ij| / r^2`
+    /// that bounds its Hessian by Cauchy-Schwarz (`material/xu_fit.rs`).
     #[inline(always)]
-    fn stiffness_from(&self, owner: usize, other: usize, k: usize, g: f64) -> f64 {
+    fn pair_stiffness(&self, i: usize, k: usize, bound: bool) -> [f64; 2] {
+        let s = &self.setup;
+        let j = s.disc.family().neighbours()[k] as usize;
+        let (gij, gji) = s.kernel.as_ref().map_or((1.0, 1.0), |(a, b)| (a[k], b[k]));
+        let fit = self.fit.as_ref().filter(|_| bound);
+        [
+            self.stiffness_from((i, j), k, gij, fit.map(|f| (f, 0))),
+            self.stiffness_from((j, i), k, gji, fit.map(|f| (f, 1))),
+        ]
+    }
+
+    /// `k` seen from `owner` across bond `k` (whose rest length and `wr` both ends share),
+    /// with the fitted weight of `end` (0: the owner's own bond, 1: its reverse) when bounding.
+    #[inline(always)]
+    fn stiffness_from(
+        &self,
+        (owner, other): (usize, usize),
+        k: usize,
+        g: f64,
+        fitted: Option<(&XuFit, usize)>,
+    ) -> f64 {
         let s = &self.setup;
         let r = s.disc.family().rest_lengths()[k];
         let [lg, mh] = s.curvature[owner];
         let vol = s.disc.volumes();
-        vol[owner] * vol[other] * (s.wr[k] * self.inv_norm[owner] / r) * (lg + mh * g)
+        let scale = vol[owner] * vol[other] * self.inv_norm[owner] / r;
+        match fitted {
+            // d_ij = inv_i r f_ij
+            Some((fit, end)) => {
+                let dil = fit.spread(owner) * fit.pairs()[k][end].abs();
+                scale * (s.wr[k] * mh * g + lg * dil)
+            }
+            None => scale * s.wr[k] * (lg + mh * g),
+        }
     }
 
     #[track_caller]
@@ -417,6 +517,12 @@ impl ForceModel for XuModel {
         same_features("inversion guard", self.guard.is_some(), r.bool("guard")?)?;
         if let Some(g) = &mut self.guard {
             g.restore(r)?;
+        }
+        if let Some(mut fit) = self.fit.take() {
+            // each particle's weights are a function of its intact bonds alone: fitted with all
+            // of them, normalised over them once one is broken
+            fit.set_all(self.fit_inputs());
+            self.fit = Some(fit);
         }
         Ok(())
     }
@@ -485,17 +591,29 @@ impl ForceModel for XuModel {
         );
         if broken.len() > start {
             self.normalise(Some(&broken[start..]));
+            if let Some(mut fit) = self.fit.take() {
+                // both ends back on the normalised weights, over the intact bonds left
+                let mut buf = std::mem::take(&mut self.fit_row);
+                let inp = self.fit_inputs();
+                for &(i, j) in &broken[start..] {
+                    fit.unfit(inp, i as usize, &mut buf);
+                    fit.unfit(inp, j as usize, &mut buf);
+                }
+                self.fit = Some(fit);
+                self.fit_row = buf;
+            }
         }
     }
 
     fn silling_askari_step(&self) -> f64 {
-        // sqrt(2 m_i / sum_j (k_ij + k_ji)) with the rest bond stiffness (N/m) of both ends
+        // sqrt(2 m_i / sum_j (k_ij + k_ji)) with the rest bond stiffness (N/m) of both ends,
+        // the fitted dilatation's bounding springs with the fit
         let fam = self.setup.disc.family();
         let mut dt = f64::INFINITY;
         for i in 0..fam.len() {
             let sum: f64 = fam
                 .range(i)
-                .map(|k| self.rest_bond_stiffness(i, k) + self.reverse_bond_stiffness(i, k))
+                .map(|k| self.pair_stiffness(i, k, true).iter().sum::<f64>())
                 .sum();
             if sum > 0.0 {
                 dt = dt.min((2.0 * self.setup.mass[i] / sum).sqrt());
@@ -514,6 +632,8 @@ impl ForceModel for XuModel {
             pq,
             scratch,
             guard,
+            fit,
+            fit_row,
         } = self;
         let Setup {
             disc,
@@ -535,6 +655,8 @@ impl ForceModel for XuModel {
             + 8 * (inv_norm.len() + theta.len() + scratch.len())
             + 16 * pq.len()
             + guard.as_ref().map_or(0, Guard::memory_bytes)
+            + fit.as_ref().map_or(0, XuFit::memory_bytes)
+            + 8 * fit_row.capacity()
     }
 
     fn damage(&self) -> Option<&Damage> {
@@ -573,9 +695,9 @@ impl QuasiNewtonModel for XuModel {
         let inp = s.inputs(y);
         let (theta, inv, pq) = (&self.theta, &self.inv_norm, &self.pq);
         let ids = s.disc.materials();
-        with_hgd!(s, self.damage.as_ref(), |h, g, d| {
+        with_hgdp!(s, &self.fit, self.damage.as_ref(), |h, g, d, p| {
             map_particles2(forces, &mut self.scratch, |i| {
-                let (f, bonds) = force_and_energy(inp, h, g, d, pq, i);
+                let (f, bonds) = force_and_energy(inp, (h, g, d, p), pq, i);
                 if inv[i] == 0.0 {
                     return (f, 0.0);
                 }

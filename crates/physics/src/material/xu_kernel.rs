@@ -116,6 +116,36 @@ impl Kernel for Stored<'_> {
     }
 }
 
+/// The pressure term's weights: `T_ij` carries `p_i a_ij + p_j a_ji` for bond `k`.
+pub(crate) trait Pressure: Sync + Copy {
+    /// The pair scalar `T_ij` of bond `k` from its `wr`, both ends' `p` and the bond term
+    /// `q_i G_ij h_i' + q_j G_ji h_j'`; the same bits from both ends.
+    fn pair(&self, k: usize, wr: f64, pi: f64, pj: f64, bond: f64) -> f64;
+}
+
+/// Xu's normalised weights: `a_ij = wr_ij` at both ends.
+#[derive(Clone, Copy)]
+pub(crate) struct Normalised;
+impl Pressure for Normalised {
+    #[inline(always)]
+    fn pair(&self, _k: usize, wr: f64, pi: f64, pj: f64, bond: f64) -> f64 {
+        wr * ((pi + pj) + bond)
+    }
+}
+
+/// The fitted weights of `xu_fit.rs`: `a_ij = f_ij`, `a_ji = f_ji`, stored per bond.
+#[derive(Clone, Copy)]
+pub(crate) struct Fitted<'a> {
+    pub pairs: &'a [[f64; 2]],
+}
+impl Pressure for Fitted<'_> {
+    #[inline(always)]
+    fn pair(&self, k: usize, wr: f64, pi: f64, pj: f64, bond: f64) -> f64 {
+        let [fij, fji] = self.pairs[k];
+        wr * bond + (pi * fij + pj * fji)
+    }
+}
+
 /// Read-only inputs of the loops.
 #[derive(Clone, Copy)]
 pub(crate) struct XuInputs<'a> {
@@ -129,6 +159,25 @@ pub(crate) struct XuInputs<'a> {
 /// `sum_j wt_ij V_j tau_ij` over intact bonds of `i` (m^3): `theta_i` before normalisation.
 #[inline(always)]
 pub(crate) fn dilatation_sum<D: Alive>(inp: XuInputs, d: D, i: usize) -> f64 {
+    row_sum(inp, d, i, |k, l| inp.wr[k] * l)
+}
+
+/// `sum_j f_ij V_j (l_ij - r_ij)` over intact bonds of `i` (m^2), with the fitted weights `f`
+/// of `xu_fit.rs`: `theta_i - 1` before normalisation.
+#[inline(always)]
+pub(crate) fn fitted_dilatation_sum<D: Alive>(
+    inp: XuInputs,
+    pairs: &[[f64; 2]],
+    d: D,
+    i: usize,
+) -> f64 {
+    let rl = inp.family.rest_lengths();
+    row_sum(inp, d, i, |k, l| pairs[k][0] * (l - rl[k]))
+}
+
+/// `sum_j term(k, l_ij) V_j` over the intact bonds `k` of `i`, `l` the current length (m).
+#[inline(always)]
+fn row_sum<D: Alive>(inp: XuInputs, d: D, i: usize, term: impl Fn(usize, f64) -> f64) -> f64 {
     let fam = inp.family;
     let nb = fam.neighbours();
     let yi = inp.y[i];
@@ -138,25 +187,23 @@ pub(crate) fn dilatation_sum<D: Alive>(inp: XuInputs, d: D, i: usize) -> f64 {
             continue;
         }
         let j = nb[k] as usize;
-        acc += inp.wr[k] * norm(sub(inp.y[j], yi)) * inp.volumes[j];
+        acc += term(k, norm(sub(inp.y[j], yi))) * inp.volumes[j];
     }
     acc
 }
 
 /// Force on `i` (N): `sum_j V_i V_j (T_ij + T_ji) n_ij` with
-/// `T_ij = wr_k (p_i + q_i G_ij h_i'(tau))`, `p = inv_norm lambda g'(theta)`,
-/// `q = inv_norm mu` from the dilatation pass. The pair scalar is bitwise the same from both
+/// `T_ij = a_ij p_i + wr_k q_i G_ij h_i'(tau)`, `p = inv_norm lambda g'(theta)`,
+/// `q = inv_norm mu` from the dilatation pass and the pressure weights `a` of [`Pressure`]. The pair scalar is bitwise the same from both
 /// ends (commutative sums and products), so Newton's third law holds bond by bond.
 #[inline(always)]
-pub(crate) fn force<H: BondCurve, G: Kernel, D: Alive>(
+pub(crate) fn force<H: BondCurve, G: Kernel, D: Alive, P: Pressure>(
     inp: XuInputs,
-    h: H,
-    g: G,
-    d: D,
+    (h, g, d, p): (H, G, D, P),
     pq: &[[f64; 2]],
     i: usize,
 ) -> Vec3 {
-    bond_loop::<H, G, D, false>(inp, h, g, d, pq, i).0
+    bond_loop::<H, G, D, P, false>(inp, (h, g, d, p), pq, i).0
 }
 
 /// The bond part of `W_i / mu_i` before normalisation: `sum_j wt_ij V_j G_ij h_i(tau_ij)`
@@ -189,25 +236,21 @@ pub(crate) fn bond_energy_sum<H: BondCurve, G: Kernel, D: Alive>(
 /// [`force`] and, in the same loop, the bond energy sum of [`bond_energy_sum`]: one pass for
 /// the implicit step, which needs both at every trial point.
 #[inline(always)]
-pub(crate) fn force_and_energy<H: BondCurve, G: Kernel, D: Alive>(
+pub(crate) fn force_and_energy<H: BondCurve, G: Kernel, D: Alive, P: Pressure>(
     inp: XuInputs,
-    h: H,
-    g: G,
-    d: D,
+    (h, g, d, p): (H, G, D, P),
     pq: &[[f64; 2]],
     i: usize,
 ) -> (Vec3, f64) {
-    bond_loop::<H, G, D, true>(inp, h, g, d, pq, i)
+    bond_loop::<H, G, D, P, true>(inp, (h, g, d, p), pq, i)
 }
 
 /// The force loop; with `ENERGY` it also sums `wt_ij V_j G_ij h_i(tau_ij)` (else 0, and no
 /// curve value is evaluated).
 #[inline(always)]
-fn bond_loop<H: BondCurve, G: Kernel, D: Alive, const ENERGY: bool>(
+fn bond_loop<H: BondCurve, G: Kernel, D: Alive, P: Pressure, const ENERGY: bool>(
     inp: XuInputs,
-    h: H,
-    g: G,
-    d: D,
+    (h, g, d, pressure): (H, G, D, P),
     pq: &[[f64; 2]],
     i: usize,
 ) -> (Vec3, f64) {
@@ -237,7 +280,7 @@ fn bond_loop<H: BondCurve, G: Kernel, D: Alive, const ENERGY: bool>(
         let (gij, gji) = g.pair(k);
         let [pj, qj] = pq[j];
         let vj = inp.volumes[j];
-        let t = inp.wr[k] * ((pi + pj) + (qi * gij * hi + qj * gji * hj));
+        let t = pressure.pair(k, inp.wr[k], pi, pj, qi * gij * hi + qj * gji * hj);
         let s = t * (vi * vj) / l;
         acc[0] += s * eta[0];
         acc[1] += s * eta[1];

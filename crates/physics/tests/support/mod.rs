@@ -230,3 +230,17 @@ pub fn yielding_steel(nu: f64, eps_y: f64, delta: f64) -> ChenMaterial {
     });
     mat
 }
+
+/// `x` with every point past `x = at` (m) moved by `gap` (m) along x: a body pulled apart
+/// across that plane.
+pub fn pulled_apart(x: &[Vec3], at: f64, gap: f64) -> Vec<Vec3> {
+    x.iter()
+        .map(|p| {
+            if p[0] > at {
+                add(*p, [gap, 0.0, 0.0])
+            } else {
+                *p
+            }
+        })
+        .collect()
+}

@@ -171,8 +171,9 @@ pub struct SetupInfo {
     pub model: &'static str,
     /// The integrator (`"explicit"`, `"implicit"`).
     pub integrator: &'static str,
-    /// How far Chen's constants stray from MODEL.md's (`None` for Xu's model): per particle,
-    /// the largest factor on its dilatation weights and the factor on `b`.
+    /// How far the constants stray from MODEL.md's: per particle, the largest factor on its
+    /// dilatation weights and Chen's factor on `b` (Xu's: the fitted dilatation's factors on
+    /// the normalised weights, its bond term's all 1; `None` with Xu's normalised weights).
     pub correction: Option<Correction>,
     /// What the build of the ghost particles found (`correction = "ghosts"`).
     pub ghosts: Option<GhostReport>,

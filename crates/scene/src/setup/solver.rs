@@ -5,7 +5,7 @@ use perifrac_physics::math::Vec3;
 use perifrac_physics::{
     ChenModel, ChenOptions, Correction, Discretization, EventSearchConfig, Explicit,
     ExplicitConfig, FaceKind, ForceModel, GhostFaces, GhostFit, GhostLayer, GhostPlane,
-    GhostReport, Ghosted, Implicit, ImplicitConfig, Loads, PhysicsError, Searched, Solver,
+    GhostReport, Ghosted, Implicit, ImplicitConfig, Loads, PhysicsError, Searched, Solver, Spread,
     TimeStep, XuKernelShape, XuModel, XuOptions,
 };
 use perifrac_topology::{BoundaryPlanes, TetMesh};
@@ -123,7 +123,11 @@ impl AnyModel {
         match self {
             AnyModel::Chen(m) => Some(m.correction()),
             AnyModel::ChenGhosts(m) => Some(m.inner().correction()),
-            AnyModel::Xu(_) => None,
+            // Xu's bond term keeps its normalised weights (factor 1)
+            AnyModel::Xu(m) => m.correction().map(|dilatation| Correction {
+                dilatation,
+                deviatoric: Spread::of(Vec::new()),
+            }),
         }
     }
 
@@ -235,12 +239,21 @@ pub(super) fn model(
                     "is a setting of Chen's ghost particles (correction = \"ghosts\")",
                 ));
             }
-            if sim.correction.is_some() {
-                return Err(ctx.err(
-                    "simulation.correction",
-                    "is a setting of Chen's model (Xu's has no per-particle constants)",
-                ));
-            }
+            let fitted_dilatation = match sim.correction.as_deref() {
+                None => XuOptions::default().fitted_dilatation,
+                Some("fitted") => true,
+                Some("none") => false,
+                Some(other) => {
+                    return Err(ctx.err(
+                        "simulation.correction",
+                        format!(
+                            "\"{other}\": Xu's model takes \"fitted\" or \"none\" (its \
+                             weights are normalised; ghosts and the scalar calibration are \
+                             Chen's)"
+                        ),
+                    ))
+                }
+            };
             let kernel = match sim.influence.as_deref() {
                 None | Some("constant") => XuKernelShape::Constant,
                 Some("inverse") => XuKernelShape::Inverse,
@@ -256,6 +269,7 @@ pub(super) fn model(
             let options = XuOptions {
                 kernel,
                 inversion_guard,
+                fitted_dilatation,
             };
             Ok(AnyModel::Xu(Box::new(
                 XuModel::new(disc, m, options).map_err(physics)?,
