@@ -442,14 +442,13 @@ impl XuModel {
         let r = s.disc.family().rest_lengths()[k];
         let [lg, mh] = s.curvature[owner];
         let vol = s.disc.volumes();
-        let scale = vol[owner] * vol[other] * self.inv_norm[owner] / r;
         match fitted {
             // d_ij = inv_i r f_ij
             Some((fit, end)) => {
                 let dil = fit.spread(owner) * fit.pairs()[k][end].abs();
-                scale * (s.wr[k] * mh * g + lg * dil)
+                vol[owner] * vol[other] * self.inv_norm[owner] / r * (s.wr[k] * mh * g + lg * dil)
             }
-            None => scale * s.wr[k] * (lg + mh * g),
+            None => vol[owner] * vol[other] * (s.wr[k] * self.inv_norm[owner] / r) * (lg + mh * g),
         }
     }
 

@@ -88,11 +88,12 @@ fn fit_row(inp: FitInputs, i: usize, row: &mut [f64]) -> (f64, f64) {
         let j = nb[k] as usize;
         sub(inp.x[j], inp.x[i]).map(|c| c / rl[k])
     };
-    // the moment sum_j wt V q q^T of the intact bonds, ridged towards the normalised weights
-    // (`L = 3 inv I`, which reads `sum w V n n` as I / 3 exactly on a symmetric family)
+    // the moment sum_j wt V q q^T of the family (every bond intact), ridged towards the
+    // normalised weights (`L = 3 inv I`, which reads `sum w V n n` as I / 3 exactly on a
+    // symmetric family)
     let c = 3.0 * inv;
     let mut a = [[0.0; 6]; 6];
-    for k in range.clone().filter(|&k| inp.alive(k)) {
+    for k in range.clone() {
         let q = mandel(direction(k));
         let s = inp.wr[k] * rl[k] * inp.volumes[nb[k] as usize];
         for p in 0..6 {
@@ -120,9 +121,7 @@ fn fit_row(inp: FitInputs, i: usize, row: &mut [f64]) -> (f64, f64) {
         let q = mandel(direction(k));
         let g = (0..6).map(|p| q[p] * l[p]).sum::<f64>() / c;
         *slot = g;
-        if inp.alive(k) {
-            far = far.max((g - 1.0).abs());
-        }
+        far = far.max((g - 1.0).abs());
     }
     // |1 + a (g - 1)| <= 1 + a |g - 1| <= FIT_BOUND
     let blend = if far > FIT_BOUND - 1.0 {
@@ -134,11 +133,9 @@ fn fit_row(inp: FitInputs, i: usize, row: &mut [f64]) -> (f64, f64) {
     for (slot, k) in row.iter_mut().zip(range) {
         let g = 1.0 + blend * (*slot - 1.0);
         *slot = inp.wr[k] * g;
-        if inp.alive(k) {
-            spread += (*slot * rl[k]).abs() * inp.volumes[nb[k] as usize];
-            if g.abs() > most.abs() {
-                most = g;
-            }
+        spread += (*slot * rl[k]).abs() * inp.volumes[nb[k] as usize];
+        if g.abs() > most.abs() {
+            most = g;
         }
     }
     (most, inv * spread)
