@@ -28,7 +28,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::chen::{FIT_BOUND, FIT_RIDGE};
-use super::fit::{cholesky_solve, mandel, Spread};
+use super::fit::{fit_tensors, mandel, Spread, ISOTROPIC_TARGET};
 use crate::family::Family;
 use crate::math::{sub, Vec3};
 use crate::par::{for_each_row, for_rows_mut};
@@ -72,10 +72,10 @@ impl FitInputs<'_> {
     }
 }
 
-/// Fits particle `i` over its bonds and writes `f_ij` of every bond of its row into `row`, or,
+/// Writes `f_ij` of every bond of particle `i` into `row` from its fitted tensor `l`, or,
 /// once it has lost a bond, the normalised weights. Returns the factor of largest magnitude (1
 /// when none passes 1) and `S_i`.
-fn fit_row(inp: FitInputs, i: usize, row: &mut [f64]) -> (f64, f64) {
+fn fit_row(inp: FitInputs, i: usize, l: &[f64; 6], row: &mut [f64]) -> (f64, f64) {
     let fam = inp.family;
     let (nb, rl) = (fam.neighbours(), fam.rest_lengths());
     let inv = inp.inv_norm[i];
@@ -88,33 +88,9 @@ fn fit_row(inp: FitInputs, i: usize, row: &mut [f64]) -> (f64, f64) {
         let j = nb[k] as usize;
         sub(inp.x[j], inp.x[i]).map(|c| c / rl[k])
     };
-    // the moment sum_j wt V q q^T of the family (every bond intact), ridged towards the
-    // normalised weights (`L = 3 inv I`, which reads `sum w V n n` as I / 3 exactly on a
-    // symmetric family)
+    // `L_i` of `fit.rs`'s fit with `omega = wt / r` (its moment `sum_j omega r V q q^T` is Xu's
+    // `sum_j wt V q q^T`) and target I, ridged towards `L = 3 inv I`, the normalised weights
     let c = 3.0 * inv;
-    let mut a = [[0.0; 6]; 6];
-    for k in range.clone() {
-        let q = mandel(direction(k));
-        let s = inp.wr[k] * rl[k] * inp.volumes[nb[k] as usize];
-        for p in 0..6 {
-            for t in 0..=p {
-                a[p][t] += s * q[p] * q[t];
-            }
-        }
-    }
-    for p in 0..6 {
-        for t in 0..p {
-            a[t][p] = a[p][t];
-        }
-    }
-    let scalar = [c, c, c, 0.0, 0.0, 0.0];
-    let tau = FIT_RIDGE * (0..6).map(|p| a[p][p]).sum::<f64>() / 6.0;
-    let mut b = [1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
-    for p in 0..6 {
-        a[p][p] += tau;
-        b[p] += tau * scalar[p];
-    }
-    let l = cholesky_solve(a, b).unwrap_or(scalar);
     // the fit's factors over the normalised weights, and the largest departure from 1
     let mut far: f64 = 0.0;
     for (slot, k) in row.iter_mut().zip(range.clone()) {
@@ -177,6 +153,11 @@ impl XuFit {
     /// alone). Returns each particle's factor of largest magnitude.
     pub(crate) fn set_all(&mut self, inp: FitInputs) -> Vec<f64> {
         let fam = inp.family;
+        let c: Vec<f64> = inp.inv_norm.iter().map(|inv| 3.0 * inv).collect();
+        let one_target = vec![0u16; fam.len()];
+        let target = (&[ISOTROPIC_TARGET][..], one_target.as_slice());
+        let (delta, wr) = (0.0, Some(inp.wr));
+        let l = fit_tensors(fam, inp.x, inp.volumes, wr, delta, &c, target, FIT_RIDGE);
         let mut own = vec![0.0; fam.num_bonds()];
         let mut per = vec![(1.0, 0.0); fam.len()];
         for_rows_mut(
@@ -187,7 +168,7 @@ impl XuFit {
                 let base = fam.offsets()[first] as usize;
                 for (i, slot) in (first..).zip(per.iter_mut()) {
                     let r = fam.range(i);
-                    *slot = fit_row(inp, i, &mut own[r.start - base..r.end - base]);
+                    *slot = fit_row(inp, i, &l[i], &mut own[r.start - base..r.end - base]);
                 }
             },
         );
