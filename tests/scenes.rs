@@ -434,7 +434,7 @@ fn ghosts_are_a_scene_option() {
     // the integrators see the real particles only
     assert_eq!(setup.driver.solver().positions().len(), n);
     // the correction's factors are reported over the completed families: a whole family's
-    // b_i is MODEL.md's to the mesh's quadrature (measured median 1.005; without ghosts this
+    // b_i is docs/model.md's to the mesh's quadrature (measured median 1.005; without ghosts this
     // slab's cut families give 2.206)
     let b = setup.info.correction.unwrap().deviatoric;
     eprintln!("b_i / b0: {b:?}");

@@ -32,13 +32,13 @@ energy under an affine uniaxial stress along x over the continuum's, and their e
 pure bending beyond the continuum's, over `E kappa^2 delta^2`, against its closed form (the
 nonlocal model's own bending stiffness, `bending_excess`).
 
-The model is MODEL.md section 2 with perifrac's default correction: each particle's dilatation
+The model is docs/model.md section 2 with perifrac's default correction: each particle's dilatation
 read through fitted weights `omega (n n : L_i)` with `sum_j omega (n n : L_i) r n n V_j = I`,
 and its deviatoric constant `b_i = 15 mu / (2 sum_j omega r^2 V_j)`; the energy
 `sum_i V_i (kappa theta_i^2 / 2 + b_i sum_j omega ed_ij^2 V_j)` with `ed = e - theta r / 3`
 and `e = n . (u_j - u_i)`. The fit's bound (`FIT_BOUND`, a blend towards the scalar
 calibration where a weight passes 10 times it) is left out. Families are horizon balls (on a
-convex box, where the face walk of MODEL.md finds nearly the same). Linear: the benchmarks'
+convex box, where the face walk of docs/model.md finds nearly the same). Linear: the benchmarks'
 loads strain the bars by under 0.3%.
 
 `--ghosts`: every particle within a horizon of a side face (y or z) is mirrored across it
@@ -190,7 +190,7 @@ class Model:
         np.add.at(a, self.i, (self.wv * self.r)[:, None, None] * q[:, :, None] * p[:, None, :])
         l = np.linalg.solve(a, np.tile([1.0, 1, 1, 0, 0, 0], (n, 1))[..., None])[..., 0]
         self.dv = self.wv * np.einsum("ij,ij->i", p, l[self.i])  # fitted weight times V_j
-        # The correction's factors on MODEL.md's constants, as `perifrac run` prints them: per
+        # The correction's factors on docs/model.md's constants, as `perifrac run` prints them: per
         # particle, the dilatation weight of largest magnitude and b_i.
         dil = np.zeros(n)
         np.maximum.at(dil, self.i, np.abs(self.dv / self.wv))

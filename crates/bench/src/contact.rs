@@ -1,4 +1,4 @@
-//! `perifrac bench contact`: contact between particles that share no intact bond (MODEL.md
+//! `perifrac bench contact`: contact between particles that share no intact bond (docs/model.md
 //! section 7). The default wall is shot to pieces with contact off, with contact measuring
 //! overlaps but pushing nothing (stiffness 0), and at several stiffnesses: how deep unbonded
 //! particles pass through each other, what the step and the run cost, and how often the pair

@@ -1,4 +1,4 @@
-//! `perifrac bench events`: what the explicit step's event search (MODEL.md section 6) buys on
+//! `perifrac bench events`: what the explicit step's event search (docs/model.md section 6) buys on
 //! an impact. The default scene's glass slab, shot by the steel ball, is run with the fixed
 //! step (0.8 of the stable limit), with the event search, with a fixed step shortened until it
 //! costs as many force evaluations as the search, and with a fine fixed step as the reference;

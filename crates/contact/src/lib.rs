@@ -1,4 +1,4 @@
-//! Penalty contact of peridynamic particles against parry3d colliders (MODEL.md section 7).
+//! Penalty contact of peridynamic particles against parry3d colliders (docs/model.md section 7).
 //!
 //! Particles are spheres (`[f64; 3]` centres in m, contact radii in m, masses in kg) handed in as
 //! plain slices; colliders are ground half-spaces and balls, stored as parry3d shapes with their

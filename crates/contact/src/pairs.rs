@@ -1,4 +1,4 @@
-//! Short-range contact between particles that share no intact bond (MODEL.md section 7): two
+//! Short-range contact between particles that share no intact bond (docs/model.md section 7): two
 //! fragments, or the two sides of a crack, push each other apart when they come closer than a
 //! contact distance, with damping and Coulomb friction as against colliders.
 //!

@@ -1,6 +1,6 @@
-//! Anisotropy helpers (MODEL.md section 4). Chen's per-particle matrix `G` enters the Chen model
-//! through [`crate::ChenMaterial::anisotropy`] (`omega = delta / |G xi|`); Xu's scalar bond
-//! factor is [`crate::XuAnisotropy::factor`].
+//! Anisotropy helpers (docs/model.md section 4). Chen's per-particle matrix `G` enters the Chen
+//! model through [`crate::ChenMaterial::anisotropy`] (`omega = delta / |G xi|`); Xu's scalar
+//! bond factor is [`crate::XuAnisotropy::factor`].
 
 use crate::math::{Mat3, Vec3};
 

@@ -1,4 +1,4 @@
-//! Families (MODEL.md section 1): a breadth-first walk over the tet face graph bounded by the
+//! Families (docs/model.md section 1): a breadth-first walk over the tet face graph bounded by the
 //! horizon ball, symmetrised, stored as CSR bonds.
 
 use crate::error::PhysicsError;

@@ -1,4 +1,4 @@
-//! Bond breaking (MODEL.md section 2, Fracture): `sw = (e - ep) / delta` against the threshold
+//! Bond breaking (docs/model.md section 2, Fracture): `sw = (e - ep) / delta` against the threshold
 //! `s_crit (1 + alpha phi)`, from either side, tension only, permanent and in both directions.
 
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};

@@ -1,6 +1,6 @@
 //! Peridynamic particles at tet barycentres, families as CSR bonds, the Chen elastoplastic
 //! state-based model with fracture, explicit integration and its stable-step estimate
-//! (`../shared/MODEL.md` sections 1, 2, 4 and 6).
+//! (`docs/model.md` sections 1, 2, 4 and 6).
 //!
 //! The crate takes plain arrays (barycentres, volumes, face adjacency) and knows nothing of the
 //! topology or io crates. Units are SI throughout. The pieces are chosen once at setup:

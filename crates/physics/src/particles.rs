@@ -1,4 +1,4 @@
-//! Particles at tet barycentres (MODEL.md section 1) and their families.
+//! Particles at tet barycentres (docs/model.md section 1) and their families.
 
 use crate::error::PhysicsError;
 use crate::family::{Family, FamilyReport, NO_NEIGHBOUR};

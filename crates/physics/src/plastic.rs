@@ -1,4 +1,4 @@
-//! Chen plasticity: the per-bond return map (MODEL.md section 2, Plasticity).
+//! Chen plasticity: the per-bond return map (docs/model.md section 2, Plasticity).
 
 /// Returns the new plastic extension of one bond (m) after the return map.
 ///

@@ -1,7 +1,7 @@
-//! Stable time step of explicit integration (MODEL.md section 6): the largest angular frequency
-//! `omega_max` of the linearised force operator, `dt_crit = 2 / omega_max`. The setup's estimate
-//! is Lanczos on `M^-1 K` ([`lanczos_frequency`]); power iteration ([`max_frequency`]) is kept
-//! as its slower reference.
+//! Stable time step of explicit integration (docs/model.md section 6): the largest angular
+//! frequency `omega_max` of the linearised force operator, `dt_crit = 2 / omega_max`. The setup's
+//! estimate is Lanczos on `M^-1 K` ([`lanczos_frequency`]); power iteration ([`max_frequency`])
+//! is kept as its slower reference.
 
 use crate::material::ForceModel;
 use crate::math::{axpy, dot, Vec3};

@@ -78,7 +78,7 @@ fn uniform_dilatation_gives_three_eps_in_the_bulk() {
     for calibrated in [false, true] {
         let (disc, _, lambda) = block(size, [10, 10, 10], 1.5);
         // calibrated: the default (the fitted dilatation over the scalar calibration);
-        // uncalibrated: MODEL.md's constants, neither correction
+        // uncalibrated: docs/model.md's constants, neither correction
         let opts = ChenOptions {
             calibrated,
             fitted_dilatation: calibrated,
@@ -133,11 +133,11 @@ fn force_is_minus_the_gradient_of_the_energy() {
 
 #[test]
 fn model_md_force_without_the_pressure_term_is_not_a_gradient() {
-    // Documents why ChenOptions::energy_consistent exists: MODEL.md's force alone differs from
+    // Documents why ChenOptions::energy_consistent exists: docs/model.md's force alone differs from
     // -dE/dy by ~13% of the largest force (measured 0.135) on this block (about 1% with the
     // calibration, which nearly zeroes S_i for smooth deformations).
     let (disc, _, _) = block([0.03; 3], [3, 3, 3], 1.5);
-    // MODEL.md as written: uniform c, no pressure term
+    // docs/model.md as written: uniform c, no pressure term
     let opts = ChenOptions {
         energy_consistent: false,
         calibrated: false,

@@ -1,4 +1,4 @@
-//! The event search (MODEL.md section 6): with no levels it is the plain explicit step bit for
+//! The event search (docs/model.md section 6): with no levels it is the plain explicit step bit for
 //! bit; with levels, its sub-steps add up to the outer step exactly, rejected trials are
 //! counted, and on a bar pulled apart the bonds it breaks are less far past their threshold
 //! than the plain step's. That an undone trial leaves nothing behind rests on the snapshot

@@ -61,10 +61,10 @@ fn uniaxial_tension_moduli_improve_with_refinement() {
 
 #[test]
 fn uniaxial_tension_with_model_md_constants_is_soft_near_surfaces() {
-    // MODEL.md's uniform constants keep nu (cut families soften bulk and shear alike) but the
+    // docs/model.md's uniform constants keep nu (cut families soften bulk and shear alike) but the
     // bar is soft: measured E / E0 = 0.7872, nu = 0.2492 at [16, 4, 4], k = 1.5.
     let (e, n) = tension([16, 4, 4], 1.5, 0.25, MODEL_MD);
-    eprintln!("MODEL.md constants [16, 4, 4]: E/E0 {e:.4}, nu {n:.4}");
+    eprintln!("docs/model.md constants [16, 4, 4]: E/E0 {e:.4}, nu {n:.4}");
     assert!((0.75..0.85).contains(&e) && (n - 0.25).abs() < 0.02);
 }
 
@@ -79,7 +79,7 @@ fn moduli_convergence_study() {
     //   k 1.5: [16,4,4] 1.136 0.101 / 1.162 0.275 / 1.196 0.458
     //          [24,6,6] 1.073 0.104 / 1.086 0.266 / 1.106 0.431
     //          [32,8,8] 1.042 0.107 / 1.050 0.263 / 1.063 0.421
-    // MODEL.md constants:
+    // docs/model.md constants:
     //   k 1.0: [16,4,4] 0.781 0.079 / 0.785 0.235 / 0.808 0.414
     //          [32,8,8] 0.795 0.081 / 0.798 0.233 / 0.814 0.396
     //   k 1.5: [16,4,4] 0.783 0.094 / 0.787 0.249 / 0.812 0.435
@@ -92,7 +92,7 @@ fn moduli_convergence_study() {
                 let (e, n) = tension(cells, k, nu, SCALAR);
                 let (m_e, m_n) = tension(cells, k, nu, MODEL_MD);
                 eprintln!(
-                    "{cells:?} k {k} nu0 {nu}: calibrated E/E0 {e:.4} nu {n:.4}; MODEL.md E/E0 {m_e:.4} nu {m_n:.4}"
+                    "{cells:?} k {k} nu0 {nu}: calibrated E/E0 {e:.4} nu {n:.4}; docs/model.md E/E0 {m_e:.4} nu {m_n:.4}"
                 );
                 errors.push(((e - 1.0).abs(), (n - nu).abs()));
             }
@@ -115,7 +115,7 @@ fn pulse_speed(cells: [usize; 3], k: f64, nu: f64, opts: ChenOptions) -> f64 {
     };
     let mut s = Explicit::new(m, &x, delta, Loads::new(x.len()), cfg).unwrap();
     // a half-Gaussian velocity at the free end, sigma = 4 delta: its wavelengths are mostly above
-    // 12 delta, where the model's dispersion stays below 1% (MODEL.md section 2)
+    // 12 delta, where the model's dispersion stays below 1% (docs/model.md section 2)
     let w = 4.0 * delta;
     for (v, p) in s.velocities_mut().iter_mut().zip(&x) {
         v[0] = (-0.5 * (p[0] / w).powi(2)).exp();
@@ -168,7 +168,7 @@ fn pulse_speed_within_five_percent() {
     // A 1 m bar with a 4 x 4 cm section (76,800 particles, ~12 s here). Measured c / sqrt(E/rho)
     // (nu = 0.25): [200,8,8] k 1.0: 1.0105 (the default, fitted), 1.0280 (the scalar
     // calibration); thinner bars are stiffer from their calibrated surface (scalar:
-    // [160,4,4] k 1.5: 1.0743, [160,3,3] k 1.0: 1.1000). With MODEL.md's uniform constants the
+    // [160,4,4] k 1.5: 1.0743, [160,3,3] k 1.0: 1.1000). With docs/model.md's uniform constants the
     // thin bars are soft: 0.881 and 0.867.
     let r = pulse_speed([200, 8, 8], 1.0, 0.25, ChenOptions::default());
     eprintln!("[200, 8, 8] k 1: c / sqrt(E/rho) = {r:.4}");

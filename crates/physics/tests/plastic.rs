@@ -36,7 +36,7 @@ fn calibrated() -> ChenOptions {
 }
 
 fn psi0(m: &ChenModel) -> f64 {
-    // as in plastic_model for gamma_y = 0.002 (MODEL.md's uniform b, not the calibrated b_i)
+    // as in plastic_model for gamma_y = 0.002 (docs/model.md's uniform b, not the calibrated b_i)
     let delta = m.discretization().horizon();
     let b = 15.0 * support::steel().shear_modulus / (2.0 * std::f64::consts::PI * delta.powi(5));
     let a_y = 2.0 * delta * b * 0.002;
@@ -122,7 +122,7 @@ fn pure_hydrostatic_compression_does_not_yield() {
             // bond by bond (to rounding, ~1e-16 r)
             assert_eq!(yielded, 0);
         } else {
-            // MODEL.md's uniform c: surface families see theta < 3 eps and yield spuriously
+            // docs/model.md's uniform c: surface families see theta < 3 eps and yield spuriously
             assert!(yielded > 0);
         }
     }
@@ -200,7 +200,7 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
     // A bar of 8 x 3 x 3 cells under the homogeneous strain of uniaxial tension (eps along x,
     // -nu eps across). A bond along x has deviatoric strain (2/3)(1 + nu) eps, the largest of
     // any direction, so with a yield strain eps_y (the scene's `yield_strain`, converted with
-    // MODEL.md's b and rescaled per particle) the first bonds yield at
+    // docs/model.md's b and rescaled per particle) the first bonds yield at
     // eps = 1.5 eps_y / (1 + nu). The fitted dilatation makes theta exact on every particle,
     // so 1% under that strain nothing yields anywhere and 1% over it bonds yield both in the
     // surface layer and inside.
@@ -239,7 +239,7 @@ fn a_bar_in_tension_yields_at_its_yield_strain_at_the_surface_as_in_the_bulk() {
         assert_eq!((s > 0, i > 0), (expect, expect));
     }
     // The surface yields early, at 0.99 of the onset, with the same limit for every particle
-    // (the yield strain converted with MODEL.md's b while the surface's b_i is larger), and
+    // (the yield strain converted with docs/model.md's b while the surface's b_i is larger), and
     // with the scalar calibration alone (its dilatation reads the edges' shear as volume
     // change).
     let mut same_limit = mat.clone();

@@ -439,7 +439,7 @@ fn the_correction_key_is_checked_and_reported() {
     assert_eq!((c.deviatoric.min, c.deviatoric.max), (1.0, 1.0));
     let plain = Setup::with_limits(&scene(&xu("none")), None, &limits()).unwrap();
     assert!(plain.info.correction.is_none());
-    // MODEL.md's constants: every factor is 1
+    // docs/model.md's constants: every factor is 1
     let none = Setup::with_limits(&scene(&with("correction = \"none\"")), None, &limits()).unwrap();
     let c = none
         .info

@@ -1,4 +1,4 @@
-//! Thin shells on triangle meshes after Gingold et al. 2004 (`../shared/MODEL.md` section 8):
+//! Thin shells on triangle meshes after Gingold et al. 2004 (`docs/model.md` section 8):
 //! membrane strain from the changes of squared edge lengths, bending strain from the changes
 //! of `phi(theta) = 2 tan(theta / 2)` of the dihedral angles, both constant per triangle, and
 //! Koiter's energy of the two; forces as its exact negative gradient, lumped masses, explicit

@@ -1,4 +1,4 @@
-//! The discrete shell's strains, energy and forces (Gingold et al. 2004, MODEL.md section 8).
+//! The discrete shell's strains, energy and forces (Gingold et al. 2004, docs/model.md section 8).
 //!
 //! Per triangle, both strains are constant and written in the rest triangle's plane:
 //!

@@ -1,4 +1,4 @@
-//! Moving the vertices with the particles (MODEL.md section 3).
+//! Moving the vertices with the particles (docs/model.md section 3).
 
 use crate::mesh::TetMesh;
 

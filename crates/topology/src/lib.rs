@@ -4,7 +4,7 @@
 //! tet index == particle index): rest mesh and face adjacency, the crack face set, multi-way
 //! vertex splitting, vertex advection from particle velocities, extraction of the surface of every
 //! piece with a crack flag, pieces, quality measures and built-in primitive meshes.
-//! See MODEL.md section 3 for the model.
+//! See docs/model.md section 3 for the model.
 
 #![warn(missing_docs)]
 

@@ -141,7 +141,7 @@ impl TetMesh {
             .collect()
     }
 
-    /// Mean length of the distinct rest edges (length): the `lambda` of MODEL.md section 1.
+    /// Mean length of the distinct rest edges (length): the `lambda` of docs/model.md section 1.
     pub fn mean_edge_length(&self) -> f64 {
         self.mean_edge
     }

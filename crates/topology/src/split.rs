@@ -1,4 +1,4 @@
-//! Multi-way vertex splitting along crack faces (MODEL.md section 3).
+//! Multi-way vertex splitting along crack faces (docs/model.md section 3).
 
 use crate::mesh::{vec_bytes, TetMesh, NO_TET};
 

@@ -1,5 +1,5 @@
-//! Property tests of MODEL.md section 3: random jittered box meshes, random crack-face sets cracked
-//! in random order and random batches.
+//! Property tests of docs/model.md section 3: random jittered box meshes, random crack-face sets
+//! cracked in random order and random batches.
 
 mod common;
 

@@ -258,9 +258,9 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
          E = {YOUNG:e} Pa and nu = {POISSON}; the two rows of a run share its cost. A section of \
          4 to 8 cells is 1.6 to 6.3 horizons across, so the particles near the surface, whose \
          families are cut, weigh in (the scalar calibration of the \"PD\" rows, `correction = \
-         \"calibrated\"`, makes them stiffer, MODEL.md's constants softer: docs/DECISIONS.md). \
-         \"PD fitted\" rows fit each particle's dilatation weights to read every homogeneous \
-         strain exactly (`correction = \"fitted\"`, the default). The \
+         \"calibrated\"`, makes them stiffer, docs/model.md's constants softer: \
+         docs/DECISIONS.md). \"PD fitted\" rows fit each particle's dilatation weights to read \
+         every homogeneous strain exactly (`correction = \"fitted\"`, the default). The \
          second table holds the horizon (m) fixed at its value on the coarsest bar at k = 1.5 \
          while the cells shrink (m-convergence, the peridynamic literature's study: the \
          discrete sums approach the nonlocal model's integrals); the first table's sweeps hold \
@@ -369,7 +369,7 @@ pub fn wave_speed(
          and 1.4 m. The reference is the bar speed sqrt(E / rho) = {:.3} m/s; the pulse is long \
          enough that its own dispersion in a continuum (Rayleigh-Love) is 0.12%, and its \
          wavelengths are above the 12 horizons where the model's dispersion stays under 1% \
-         (MODEL.md section 2).",
+         (docs/model.md section 2).",
         (YOUNG / DENSITY).sqrt()
     );
     Ok(CaseReport {

@@ -1,4 +1,4 @@
-//! Explicit steps with an event search (MODEL.md section 6, after the thin-shell paper's time
+//! Explicit steps with an event search (docs/model.md section 6, after the thin-shell paper's time
 //! stepping): each step of length `dt` is covered by sub-steps of `dt 2^-k`; a trial sub-step
 //! is undone whole (state, model history, forces and the environment's bodies, from an
 //! in-memory snapshot) and retried at `k + 1` when the largest force grew by more than a

@@ -1,4 +1,4 @@
-//! The implicit quasi-Newton step (MODEL.md section 5; Liu, Bouaziz and Kavan's quasi-Newton
+//! The implicit quasi-Newton step (docs/model.md section 5; Liu, Bouaziz and Kavan's quasi-Newton
 //! method, as Xu et al. use it): each step minimises
 //! `Phi(q) = |q - q*|^2_M / (2 dt^2) + c |q - q_n|^2_M / (2 dt) + E(q) + P_env(q, c)`,
 //! `q* = q_n + dt v_n + dt^2 g`, over the free particles' end positions `q` (anchored ones sit

@@ -76,7 +76,7 @@ fn eigenvalues(a: &[f64], m: usize) -> Vec<f64> {
 }
 
 /// `S` is symmetric positive definite, and it bounds the true Hessian of `Phi` at rest from
-/// above: `S - H` is positive semi-definite. MODEL.md's `S` is not the Hessian itself: each
+/// above: `S - H` is positive semi-definite. docs/model.md's `S` is not the Hessian itself: each
 /// bond contributes `k I_3` where the Hessian has `k n n^T`, and the dilatation term's
 /// coupling of a particle's whole family is replaced by its pairwise Cauchy-Schwarz bound
 /// (`(sum_j w V a_j)^2 <= sum_j w V a_j^2` with `sum_j w V = 1`). So `S` agrees with `H` on the

@@ -1,4 +1,4 @@
-//! The constant matrix of the quasi-Newton step (MODEL.md section 5),
+//! The constant matrix of the quasi-Newton step (docs/model.md section 5),
 //! `S = M / dt^2 + c M / dt + L` with `L = sum_bonds k_ij (e_i - e_j)(e_i - e_j)^T`, on the free
 //! (not anchored) particles. `L` is the same for the three coordinates, so `S = S_1 (x) I_3`
 //! and only the scalar `n_free x n_free` matrix `S_1` is factored (a third of the unknowns:

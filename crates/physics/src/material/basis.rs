@@ -1,4 +1,4 @@
-//! Xu's one-dimensional basis functions and the energy curves built from them (MODEL.md
+//! Xu's one-dimensional basis functions and the energy curves built from them (docs/model.md
 //! section 5): `A_n`, `B_n` of a stretch `s > 0` with their first and second derivatives, and
 //! [`Curve`], a combination of them that is zero with zero slope at `s = 1`.
 
@@ -159,7 +159,7 @@ mod tests {
         }
     }
 
-    /// The closed forms equal their basis combinations (MODEL.md section 5).
+    /// The closed forms equal their basis combinations (docs/model.md section 5).
     #[test]
     fn named_curves_are_their_basis_combinations() {
         let linear = Curve::Custom(vec![(Basis::B(1), 1.0)]);

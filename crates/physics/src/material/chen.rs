@@ -1,4 +1,4 @@
-//! The Chen elastoplastic state-based model with fracture (MODEL.md section 2, with its
+//! The Chen elastoplastic state-based model with fracture (docs/model.md section 2, with its
 //! Decisions: `Lambda = 1`, `ed = e - theta r / 3`, return-map increment `/(4 omega b)`,
 //! threshold-scaled fracture).
 
@@ -27,16 +27,16 @@ use std::f64::consts::PI;
 pub struct ChenOptions {
     /// Add the energy-consistent pressure term: `a_i theta_i` becomes
     /// `a_i theta_i - (b_i c_i / 3) S_i`, `S_i = sum_j omega_ij r_ij (ed_ij - ep_ij) V_j`, which
-    /// makes the force exactly `-dE/dy` of the stored energy (MODEL.md's force is not a gradient:
-    /// `theta` weights extensions by `omega` while `ed` removes `theta r / 3`). `S_i` vanishes for
-    /// homogeneous deformations of the continuum, so the moduli are unchanged.
+    /// makes the force exactly `-dE/dy` of the stored energy (docs/model.md's force is not a
+    /// gradient: `theta` weights extensions by `omega` while `ed` removes `theta r / 3`). `S_i`
+    /// vanishes for homogeneous deformations of the continuum, so the moduli are unchanged.
     pub energy_consistent: bool,
-    /// Per-particle calibration from the discrete family (MODEL.md section 2 lists it as an
+    /// Per-particle calibration from the discrete family (docs/model.md section 2 lists it as an
     /// option): `c_i = 3 / sum_j omega_ij r_ij V_j`, `a_i = kappa_i c_i / 2` and
     /// `b_i = 15 mu_i / (2 sum_j omega_ij r_ij^2 V_j)` instead of `9 / (4 pi delta^4)`,
     /// `9 kappa / (8 pi delta^4)` and `15 mu / (2 pi delta^5)`. A uniform dilatation `eps` then
     /// gives `theta = 3 eps` and `ed = 0` on every bond of every particle, surface ones
-    /// included, which MODEL.md's pressure-free Decision needs on a discrete mesh (with the
+    /// included, which docs/model.md's pressure-free Decision needs on a discrete mesh (with the
     /// uniform constants interior Kuhn-lattice particles get `theta = 3.077 eps` and surface ones
     /// as little as a quarter of it, so pressure leaks into `A_dev` and yields), and the
     /// measured moduli of a bar come closer (see tests/moduli.rs). It stiffens cut families
@@ -502,7 +502,7 @@ impl ChenModel {
             pairs
         });
         // the correction's spread over the particles: the dilatation weight's largest over
-        // MODEL.md's (`c_i / c0` times the fit's), and `b_i / b0`
+        // docs/model.md's (`c_i / c0` times the fit's), and `b_i / b0`
         let m0 = PI * delta.powi(5);
         let correction = Correction {
             dilatation: Spread::of((0..active).map(|i| worst[i] * c_theta[i] / c0).collect()),
@@ -585,12 +585,12 @@ impl ChenModel {
 
     /// Adds the inversion guard of factor `factor` (> 0, finite): a spring of `factor` times
     /// each bond's rest stiffness towards its particle's least-squares affine deformation,
-    /// flipped where that is inverted (MODEL.md section 5; `material/guard.rs`). Chen's bonds are
-    /// linear springs that store no more energy as a neighbourhood folds through itself; the
-    /// guard resists the non-affine part of a deformation, where a fold starts, and carries
-    /// nothing under a uniform one. It costs two walks over the bonds a step (with a 3 x 3
-    /// product a bond) and a shorter stable step (at factor 10, 2.8 times on a free steel block;
-    /// 1.6 times in a press whose stiff plate already shortened it).
+    /// flipped where that is inverted (docs/model.md section 5; `material/guard.rs`). Chen's
+    /// bonds are linear springs that store no more energy as a neighbourhood folds through
+    /// itself; the guard resists the non-affine part of a deformation, where a fold starts, and
+    /// carries nothing under a uniform one. It costs two walks over the bonds a step (with a
+    /// 3 x 3 product a bond) and a shorter stable step (at factor 10, 2.8 times on a free steel
+    /// block; 1.6 times in a press whose stiff plate already shortened it).
     pub fn with_inversion_guard(mut self, factor: f64) -> Result<Self, PhysicsError> {
         if !(factor.is_finite() && factor > 0.0) {
             return Err(PhysicsError::BadSetting(format!(
@@ -708,8 +708,8 @@ impl ChenModel {
         (self.setup.coef_a[i], self.setup.coef_b[i])
     }
 
-    /// How far the model's constants stray from MODEL.md's (`9 / (4 pi delta^4)` and
-    /// `15 mu / (2 pi delta^5)`), per particle: the dilatation weight over MODEL.md's of
+    /// How far the model's constants stray from docs/model.md's (`9 / (4 pi delta^4)` and
+    /// `15 mu / (2 pi delta^5)`), per particle: the dilatation weight over docs/model.md's of
     /// largest magnitude among its bonds (`c_i d_ij / (c0 omega_ij)`: `c_i / c0` calibrated,
     /// `n n : L_i / c0` fitted, 1 with neither), and `b_i / b0`.
     pub fn correction(&self) -> Correction {

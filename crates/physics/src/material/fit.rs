@@ -353,7 +353,7 @@ fn blended(
     ([d_ij, d_ji], d_ij / w_ij)
 }
 
-/// A distribution of correction factors (1: MODEL.md's constant).
+/// A distribution of correction factors (1: docs/model.md's constant).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spread {
     /// Smallest factor.
@@ -396,13 +396,13 @@ impl Spread {
     }
 }
 
-/// How far a Chen model's constants stray from MODEL.md's, from
+/// How far a Chen model's constants stray from docs/model.md's, from
 /// [`super::ChenModel::correction`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Correction {
-    /// Per particle: the dilatation weight over MODEL.md's of largest magnitude on its bonds.
+    /// Per particle: the dilatation weight over docs/model.md's of largest magnitude on its bonds.
     pub dilatation: Spread,
-    /// Per particle: the deviatoric constant `b_i` over MODEL.md's.
+    /// Per particle: the deviatoric constant `b_i` over docs/model.md's.
     pub deviatoric: Spread,
 }
 

@@ -1,4 +1,4 @@
-//! The inversion guard (MODEL.md section 5, Xu's; Chen's model takes it too): a spring on each
+//! The inversion guard (docs/model.md section 5, Xu's; Chen's model takes it too): a spring on each
 //! bond towards the particle's least-squares affine deformation,
 //! `E_inv = f/2 sum_i sum_j k_ij |eta_ij - F_i xi_ij|^2`, with `F_i` flipped (two rows swapped)
 //! where `det F_i < 0` so an inverted neighbourhood is pulled back out. `F_i` is lagged: fitted

@@ -418,7 +418,7 @@ impl Yield<'_> {
         self.inside[i][0]
     }
 
-    /// The return map (MODEL.md, Plasticity) of particle `i`'s end of a bond: `wr` its weight
+    /// The return map (docs/model.md, Plasticity) of particle `i`'s end of a bond: `wr` its weight
     /// times its rest length `r` (m), `w` its weight (asked for only when the bond yields),
     /// extension `e` (m), plastic extension `ep` (m), `i`'s dilatation `theta`. Returns
     /// `(ed, ep_new)`. Both ends of a bond run this with the same bits wherever it is called, so

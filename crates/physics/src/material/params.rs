@@ -1,4 +1,4 @@
-//! Parameters of the Chen elastoplastic material with fracture (MODEL.md section 2).
+//! Parameters of the Chen elastoplastic material with fracture (docs/model.md section 2).
 
 use crate::error::PhysicsError;
 use crate::math::Mat3;
@@ -10,14 +10,14 @@ pub struct YieldParams {
     pub psi0: f64,
     /// Cap of the plastic extension as a ratio of the rest bond length (dimensionless).
     pub gamma_ratio: f64,
-    /// `psi0` was converted from a yield strain with MODEL.md's `b = 15 mu / (2 pi delta^5)`:
+    /// `psi0` was converted from a yield strain with docs/model.md's `b = 15 mu / (2 pi delta^5)`:
     /// each particle scales it by `(b_i / b)^2`, so that a bond yields at that deviatoric
     /// strain with the particle's own (corrected) `b_i`, at the surface as in the bulk. False:
     /// `psi0` is the paper's raw limit, the same for every particle.
     pub from_strain: bool,
 }
 
-/// Fracture criterion (MODEL.md section 2, Fracture).
+/// Fracture criterion (docs/model.md section 2, Fracture).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FractureParams {
     /// Critical measure `s_crit` for `sw = (e - ep) / delta` (dimensionless); infinity: no fracture.
@@ -62,7 +62,7 @@ pub struct ChenMaterial {
     pub plasticity: Option<YieldParams>,
     /// Fracture threshold; `None` (or an infinite `s_crit`) never breaks (no damage state).
     pub fracture: Option<FractureParams>,
-    /// Anisotropy matrix `G` of `omega = delta / |G xi|` (MODEL.md section 4); `None` is `I`.
+    /// Anisotropy matrix `G` of `omega = delta / |G xi|` (docs/model.md section 4); `None` is `I`.
     pub anisotropy: Option<Mat3>,
 }
 

@@ -1,6 +1,6 @@
-//! Xu's hyperelastic peridynamic model (MODEL.md section 5): normalised weights, dilatation from
-//! stretch ratios, `W_i = lambda g(theta_i) + mu sum_j w_ij V_j G_ij h(tau_ij)`, forces as the
-//! exact negative gradient of `E = sum_i V_i W_i`, bond breaking as in Chen's model, and an
+//! Xu's hyperelastic peridynamic model (docs/model.md section 5): normalised weights, dilatation
+//! from stretch ratios, `W_i = lambda g(theta_i) + mu sum_j w_ij V_j G_ij h(tau_ij)`, forces as
+//! the exact negative gradient of `E = sum_i V_i W_i`, bond breaking as in Chen's model, and an
 //! optional inversion guard (`material/guard.rs`).
 
 use super::basis::Curve;
@@ -48,7 +48,7 @@ impl XuKernelShape {
 pub struct XuOptions {
     /// The influence function.
     pub kernel: XuKernelShape,
-    /// The inversion guard's factor on the rest bond stiffness (MODEL.md section 5), `None`:
+    /// The inversion guard's factor on the rest bond stiffness (docs/model.md section 5), `None`:
     /// no guard.
     pub inversion_guard: Option<f64>,
     /// Reads the dilatation through per-bond weights fitted so that every uniform small strain

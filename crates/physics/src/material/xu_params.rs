@@ -1,11 +1,11 @@
-//! Parameters of Xu's hyperelastic peridynamic material (MODEL.md section 5).
+//! Parameters of Xu's hyperelastic peridynamic material (docs/model.md section 5).
 
 use super::basis::Curve;
 use super::params::{bad, check_young_poisson, FractureParams};
 use crate::error::PhysicsError;
 use crate::math::{dot, Mat3, Vec3};
 
-/// Xu's anisotropic kernel `G_ij = |Sigma R xi / r|` (MODEL.md section 4).
+/// Xu's anisotropic kernel `G_ij = |Sigma R xi / r|` (docs/model.md section 4).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct XuAnisotropy {
     /// Orthonormal material axes, as the columns of `R`.
@@ -62,7 +62,7 @@ impl XuAnisotropy {
 /// How Young's modulus and Poisson's ratio become Xu's `lambda` and `mu`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum XuModuli {
-    /// The paper's approximate relation (MODEL.md section 5):
+    /// The paper's approximate relation (docs/model.md section 5):
     /// `lambda = 9 E nu / (2 (1 + nu)(1 - 2 nu))`, `mu = 15 E / (4 (1 + nu))`.
     Paper,
     /// The small-strain limit of the energy over a full, isotropic, normalised family:
@@ -223,7 +223,7 @@ mod tests {
             XuModuli::Paper,
         )
         .unwrap();
-        // MODEL.md: lam = 9 E nu / (2 (1 + nu)(1 - 2 nu)), mu = 15 E / (4 (1 + nu))
+        // docs/model.md: lam = 9 E nu / (2 (1 + nu)(1 - 2 nu)), mu = 15 E / (4 (1 + nu))
         assert!((p.lambda - 9.0 * e * nu / (2.0 * 1.3 * 0.4)).abs() < 1e-6);
         assert!((p.mu - 15.0 * e / (4.0 * 1.3)).abs() < 1e-6);
         let c = XuMaterial::from_young_poisson(

@@ -217,7 +217,7 @@ pub fn mesh_disc(mesh: &TetMesh, k: f64) -> Discretization {
 }
 
 /// Steel of Poisson's ratio `nu` whose bonds yield at the deviatoric strain `eps_y` (the
-/// scene's `yield_strain`, converted with MODEL.md's `b` at horizon `delta` (m) and rescaled
+/// scene's `yield_strain`, converted with docs/model.md's `b` at horizon `delta` (m) and rescaled
 /// per particle), extensions capped at 0.2 of a bond.
 pub fn yielding_steel(nu: f64, eps_y: f64, delta: f64) -> ChenMaterial {
     let mut mat = ChenMaterial::from_young_poisson(200e9, nu, 7800.0).unwrap();

@@ -103,8 +103,8 @@ fn find(parent: &mut [usize], mut x: usize) -> usize {
     x
 }
 
-/// Checks every invariant of MODEL.md section 3 by brute force; `rest_volume` is the total rest
-/// volume of the uncut mesh.
+/// Checks every invariant of docs/model.md section 3 by brute force; `rest_volume` is the total
+/// rest volume of the uncut mesh.
 pub fn check_invariants(m: &TetMesh, rest_volume: f64) {
     let tets = m.tets();
     let nb = m.neighbours();
