@@ -56,7 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "{} steps, {} bonds broken, {} fragments, kinetic energy {:.3e} J; frames in {}",
         summary.steps,
-        summary.broken_bonds,
+        summary.solid().map_or(0, |s| s.broken_bonds),
         summary.fragments,
         summary.kinetic_energy,
         out.join("frames").display()

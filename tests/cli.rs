@@ -226,3 +226,25 @@ fn inverted_tets_are_reoriented_and_counted() {
     ok(&["convert", path.to_str().unwrap(), out.to_str().unwrap()]);
     assert_eq!(info_json(&out)["inverted_fixed"], 0);
 }
+
+#[test]
+fn help_names_every_subcommand_in_its_first_line() {
+    let help = ok(&["--help"]);
+    let first = help.lines().next().unwrap();
+    // The subcommands are the first words of the lines under "Commands:", up to a blank line.
+    let commands: Vec<&str> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|&c| c != "help")
+        .collect();
+    assert!(commands.len() >= 7, "too few subcommands found in:\n{help}");
+    for c in commands {
+        assert!(
+            first.split([' ', ',', ':']).any(|w| w == c),
+            "`{c}` is missing from the help's first line: {first}"
+        );
+    }
+}

@@ -8,9 +8,17 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use perifrac_scene::{
-    resume, resume_shell, run, run_shell, Checkpoint, Observer, Progress, Scene, SceneError, Setup,
-    ShellScene, ShellSetup, Silent, CHECKPOINT_FILE,
+    resume, run, AnyScene, Checkpoint, Observer, Progress, Scene, SceneError, Setup, ShellScene,
+    ShellSetup, Silent, CHECKPOINT_FILE,
 };
+
+/// The tet scene a checkpoint was written for.
+fn solid_scene(cp: &Checkpoint) -> Scene {
+    match cp.scene().unwrap() {
+        AnyScene::Solid(scene) => *scene,
+        AnyScene::Shell(_) => panic!("the checkpoint's scene is a shell's"),
+    }
+}
 
 /// Asks for an interruption at a given step count, or after a given frame is written.
 struct InterruptAt {
@@ -81,10 +89,13 @@ fn check_resume(
             "run.json records the interruption:\n{manifest}"
         );
         let cp = Checkpoint::read(&dir).unwrap();
-        let resumed_setup = Setup::new(&cp.scene().unwrap(), Some(cp.frames)).unwrap();
+        let resumed_setup = Setup::new(&solid_scene(&cp), Some(cp.frames)).unwrap();
         let summary = resume(resumed_setup, &cp, &dir, &mut Silent).unwrap();
         assert_eq!(summary.steps, whole.steps);
-        assert_eq!(summary.broken_bonds, whole.broken_bonds);
+        assert_eq!(
+            summary.solid().unwrap().broken_bonds,
+            whole.solid().unwrap().broken_bonds
+        );
         let got = common::files(&dir);
         assert_eq!(
             got.keys().collect::<Vec<_>>(),
@@ -140,7 +151,10 @@ fn a_brittle_slab_hit_by_a_ball_resumes_byte_identically() {
             (None, Some(4)),
         ],
     );
-    assert!(whole.broken_bonds > 0 && whole.fragments > 1, "{whole:?}");
+    assert!(
+        whole.solid().unwrap().broken_bonds > 0 && whole.fragments > 1,
+        "{whole:?}"
+    );
 }
 
 #[test]
@@ -184,7 +198,7 @@ fn an_implicit_tear_resumes_byte_identically() {
         &[(Some(5), None), (Some(24), None), (None, Some(9))],
     );
     assert!(
-        whole.broken_bonds > 0 && whole.solver.factorizations > 1,
+        whole.solid().unwrap().broken_bonds > 0 && whole.solid().unwrap().solver.factorizations > 1,
         "{whole:?}"
     );
 }
@@ -211,7 +225,7 @@ fn an_event_search_run_resumes_byte_identically() {
         let spf = setup(&scene, 4).steps_per_frame;
         let whole = check_resume(&scene, 4, &[(Some(spf + 3), None), (None, Some(2))]);
         assert!(
-            whole.solver.rejected > 0 && whole.broken_bonds > 0,
+            whole.solid().unwrap().solver.rejected > 0 && whole.solid().unwrap().broken_bonds > 0,
             "{guard}: {whole:?}"
         );
     }
@@ -234,9 +248,9 @@ fn a_self_contact_run_resumes_byte_identically() {
     // so the forces do not depend on when the list was built
     let spf = setup(&scene, 5).steps_per_frame;
     let whole = check_resume(&scene, 5, &[(Some(spf + spf / 3), None), (None, Some(3))]);
-    let (builds, deepest) = whole.self_contact.unwrap();
+    let (builds, deepest) = whole.solid().unwrap().self_contact.unwrap();
     assert!(
-        builds > 1 && deepest.pairs > 0 && whole.broken_bonds > 0,
+        builds > 1 && deepest.pairs > 0 && whole.solid().unwrap().broken_bonds > 0,
         "{whole:?}"
     );
 }
@@ -406,8 +420,11 @@ fn shell_resumes_byte_identically(text: &str, name: &str) {
     let whole = tempfile::tempdir().unwrap();
     let setup = ShellSetup::new(&scene(), None, false).unwrap();
     let total = setup.steps_per_frame * setup.frames as u64;
-    let summary = run_shell(setup, whole.path(), &mut Silent).unwrap();
-    assert!(summary.broken_triangles > 0, "{name}: {summary:?}");
+    let summary = run(setup, whole.path(), &mut Silent).unwrap();
+    assert!(
+        summary.shell().unwrap().broken_triangles > 0,
+        "{name}: {summary:?}"
+    );
     let cut = tempfile::tempdir().unwrap();
     let at = 3 * total / 4 + 1;
     let setup = ShellSetup::new(&scene(), None, false).unwrap();
@@ -416,7 +433,7 @@ fn shell_resumes_byte_identically(text: &str, name: &str) {
         taken: 0,
         broken: 0,
     };
-    let stopped = run_shell(setup, cut.path(), &mut stop);
+    let stopped = run(setup, cut.path(), &mut stop);
     assert!(
         matches!(stopped, Err(SceneError::Interrupted { step, .. }) if step == at),
         "{name}: {stopped:?}"
@@ -424,20 +441,27 @@ fn shell_resumes_byte_identically(text: &str, name: &str) {
     // triangles broke before the checkpoint and after it: it carries a cut mesh
     eprintln!(
         "{name}: {} broken at the checkpoint, {} at the end",
-        stop.broken, summary.broken_triangles
+        stop.broken,
+        summary.shell().unwrap().broken_triangles
     );
     assert!(
-        stop.broken > 0 && (stop.broken as usize) < summary.broken_triangles,
+        stop.broken > 0 && (stop.broken as usize) < summary.shell().unwrap().broken_triangles,
         "{name}: {} of {}",
         stop.broken,
-        summary.broken_triangles
+        summary.shell().unwrap().broken_triangles
     );
     let cp = Checkpoint::read(cut.path()).unwrap();
-    assert!(cp.is_shell());
-    let setup = ShellSetup::new(&cp.shell_scene().unwrap(), Some(cp.frames), false).unwrap();
-    let resumed = resume_shell(setup, &cp, cut.path(), &mut Silent).unwrap();
+    let AnyScene::Shell(scene) = cp.scene().unwrap() else {
+        panic!("{name}: the checkpoint's scene is not a shell's");
+    };
+    let setup = ShellSetup::new(&scene, Some(cp.frames), false).unwrap();
+    let resumed = resume(setup, &cp, cut.path(), &mut Silent).unwrap();
     assert_eq!(resumed.steps, summary.steps, "{name}");
-    assert_eq!(resumed.broken_triangles, summary.broken_triangles, "{name}");
+    assert_eq!(
+        resumed.shell().unwrap().broken_triangles,
+        summary.shell().unwrap().broken_triangles,
+        "{name}"
+    );
     let (a, b) = (common::files(whole.path()), common::files(cut.path()));
     assert_eq!(
         a.keys().collect::<Vec<_>>(),

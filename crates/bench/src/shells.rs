@@ -501,14 +501,17 @@ pub fn bulb(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Ben
             .map_err(|e| fail(e.to_string()))?;
         let start = setup.shell.shell().model().mesh().triangles().len();
         let dir = crate::look::temp_dir("bulb")?;
-        let s = perifrac_scene::run_shell(setup, dir.path(), &mut perifrac_scene::Silent)
+        let summary = perifrac_scene::run(setup, dir.path(), &mut perifrac_scene::Silent)
             .map_err(|e| fail(e.to_string()))?;
+        let s = summary
+            .shell()
+            .ok_or_else(|| fail("a shell scene ran as a solid".into()))?;
         let stepping = s.physics_time.as_secs_f64().max(1e-9);
         let self_share = s.self_contact.map_or(0.0, |(secs, _)| secs / stepping);
         t.push(vec![
             format!("{subdivisions} subdivisions"),
             format!("{start} / {}", s.triangles),
-            format!("{:.2}", 1e3 * s.time),
+            format!("{:.2}", 1e3 * summary.time),
             s.substeps.to_string(),
             format!("{stepping:.1}"),
             format!(
@@ -518,7 +521,7 @@ pub fn bulb(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<Table, Ben
             format!("{:.1}%", 100.0 * self_share),
             format!("{:.1}%", 100.0 * s.collider_seconds / stepping),
             s.broken_triangles.to_string(),
-            s.fragments.to_string(),
+            summary.fragments.to_string(),
         ]);
     }
     Ok(t)

@@ -17,7 +17,7 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, ensure, Context, Result};
 use perifrac_io::{atomic_write, read_ply_frame, read_ply_points, write_povray_mesh2, SurfaceRef};
 use perifrac_physics::math::{add, cross, dot, norm, scale, sub};
-use perifrac_scene::output::{BallJson as Ball, Bounds, GroundJson as Ground};
+use perifrac_scene::manifest::{BallJson as Ball, Bounds, GroundJson as Ground};
 use perifrac_scene::{POVRAY_MESH_NAME as MESH_NAME, RUN_FORMAT};
 use serde::Deserialize;
 

@@ -12,9 +12,11 @@ use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use perifrac_physics::EstimateMemo;
 use perifrac_scene::{
-    check_output_dir, Checkpoint, Limits, MemoDir, Observer, Progress, Scene, SceneError, Setup,
-    ShellScene, ShellSetup,
+    check_output_dir, AnyScene, AnySetup, Checkpoint, Limits, MemoDir, Observer, Progress,
+    SceneError,
 };
+
+mod report;
 
 /// Arguments of `perifrac run`.
 #[derive(clap::Args, Debug)]
@@ -123,24 +125,14 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
                 );
             }
             eprintln!("resuming {} from {}", cp.header.summary, dir.display());
-            if cp.is_shell() {
-                let (scene, text) = (cp.scene_path.clone(), cp.scene_text.clone());
-                return run_shell(&scene, &text, dir, args, threads, Some(&cp));
-            }
-            let scene = cp.scene()?;
-            (dir.as_path(), scene, Some(cp.frames), Some(cp))
+            (dir.as_path(), cp.scene()?, Some(cp.frames), Some(cp))
         }
         None => {
             let (Some(scene), Some(dir)) = (&args.scene, &args.output) else {
                 anyhow::bail!("give a scene and -o DIR, or --resume DIR");
             };
             check_output_dir(dir, args.force)?;
-            let text = std::fs::read_to_string(scene)
-                .with_context(|| format!("cannot read {}", scene.display()))?;
-            if perifrac_scene::is_shell_scene(&text) {
-                return run_shell(scene, &text, dir, args, threads, None);
-            }
-            (dir.as_path(), Scene::load(scene)?, args.frames, None)
+            (dir.as_path(), AnyScene::load(scene)?, args.frames, None)
         }
     };
     let limits = Limits {
@@ -153,94 +145,28 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
         .flatten()
         .map(MemoDir::new);
     let memo_dyn = memo.as_ref().map(|m| m as &dyn EstimateMemo);
-    let setup = Setup::with_memo(&scene, frames, &limits, memo_dyn).map_err(|e| match e {
+    let setup = AnySetup::new(&scene, frames, &limits, memo_dyn).map_err(|e| match e {
         SceneError::TooLarge { .. } => {
             anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
         }
         other => other.into(),
     })?;
-    let info = &setup.info;
-    let frames = setup.frames;
-    eprintln!(
-        "{}: {} particles, {} bonds, {} model, {} integrator, horizon {:.3e} m, dt {:.3e} s \
-         (explicit stable limit {:.3e} s{}), {} frames of {} steps, {} on {threads} \
-         thread(s), setup {:.2} s (mesh {:.2}, bond families {:.2}, model {:.2}, stable step \
-         {:.2}{})",
-        scene.path.display(),
-        info.particles,
-        info.bonds,
-        info.model,
-        info.integrator,
-        info.horizon,
-        info.dt,
-        info.dt_limit,
-        if info.travel_limit.is_finite() {
-            format!(", contact travel limit {:.3e} s", info.travel_limit)
-        } else {
-            String::new()
-        },
-        frames,
-        setup.steps_per_frame,
-        info.estimate,
-        started.elapsed().as_secs_f64(),
-        info.times.mesh.as_secs_f64(),
-        info.times.families.as_secs_f64(),
-        info.times.model.as_secs_f64(),
-        info.times.stable_step.as_secs_f64(),
-        if info.times.stable_step_recalled {
-            ", recalled from the cache"
-        } else {
-            ""
-        },
+    let on = format!(
+        "{} frames of {} steps on {threads} thread(s), setup {:.2} s",
+        setup.frames(),
+        setup.steps_per_frame(),
+        started.elapsed().as_secs_f64()
     );
+    match &setup {
+        AnySetup::Solid(s) => report::solid_setup(scene.path(), s, &on),
+        AnySetup::Shell(s) => report::shell_setup(scene.path(), s, &on),
+    }
     if let Some(failure) = memo.as_ref().and_then(MemoDir::failure) {
         eprintln!(
             "warning: the stable-step estimate could not be cached ({failure}); the next run \
              estimates it again (set {} to a writable directory, or pass --no-cache)",
             perifrac_scene::memo::CACHE_ENV
         );
-    }
-    if let (Some(c), "xu") = (&info.correction, info.model) {
-        let d = c.dilatation;
-        eprintln!(
-            "correction of Xu's normalised dilatation weights (fitted): x{:.3} to x{:.3} (median \
-             {:.3}, 99% under {:.3} in magnitude)",
-            d.min, d.max, d.median, d.p99
-        );
-    } else if let Some(c) = &info.correction {
-        let (d, b) = (c.dilatation, c.deviatoric);
-        eprintln!(
-            "correction of MODEL.md's constants: dilatation weights x{:.3} to x{:.3} (median \
-             {:.3}, 99% under {:.3} in magnitude), b x{:.3} to x{:.3} (median {:.3}, 99% under \
-             {:.3})",
-            d.min, d.max, d.median, d.p99, b.min, b.max, b.median, b.p99
-        );
-        if let Some(g) = &info.ghosts {
-            eprintln!(
-                "ghost particles across the boundary: {} ({:.1} a particle; {} bonds, {:.2} a \
-                 real one), gain median {:.1}, 99% under {:.1}, largest {:.1} ({} quadratic fits \
-                 fell back to affine ones, {} bonds too short left out)",
-                g.ghosts,
-                g.ghosts as f64 / info.particles.max(1) as f64,
-                g.bonds,
-                g.bonds as f64 / info.bonds.max(1) as f64,
-                g.gain.median,
-                g.gain.p99,
-                g.gain.max,
-                g.affine_fallbacks,
-                g.short
-            );
-        }
-        use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};
-        // b_i / b0 is a full ball's moment over the family's: how much of it a particle lost
-        if b.p99 > CORRECTION_WARNING || b.max > CORRECTION_WARNING_MAX {
-            eprintln!(
-                "warning: factors on b past {CORRECTION_WARNING} (1 in 100) or \
-                 {CORRECTION_WARNING_MAX} (any): some particles have lost most of their family \
-                 (tets much larger than the horizon, or parts one or two tets across); a finer \
-                 or more even mesh, or a larger horizon factor, gives them more bonds"
-            );
-        }
     }
     let interactive = std::io::stderr().is_terminal() && !args.quiet;
     let mut bar = Bar::new(interactive, interrupt_flag()?);
@@ -251,223 +177,10 @@ fn run_on_pool(args: &RunArgs, threads: usize) -> Result<()> {
     };
     bar.finish();
     let wall = t0.elapsed().as_secs_f64();
-    let summary = result.map_err(|e| stopped(e, &scene.path, dir))?;
+    let summary = result.map_err(|e| stopped(e, scene.path(), dir))?;
     // steps taken by this process (a resumed run took the others before)
     let resumed_at = checkpoint.as_ref().map_or(0, steps_before);
-    let stepped = summary.steps.saturating_sub(resumed_at);
-    let t = summary.stage_times;
-    let share =
-        |d: std::time::Duration| 100.0 * d.as_secs_f64() / t.total().as_secs_f64().max(1e-12);
-    eprintln!(
-        "done in {wall:.2} s: {} steps ({}{:.0} steps/s), t = {:.4e} s, {} bonds broken, \
-         {} fragments, {} crack triangles",
-        summary.steps,
-        if resumed_at > 0 {
-            format!("{stepped} after resuming, ")
-        } else {
-            String::new()
-        },
-        stepped as f64 / wall.max(1e-9),
-        summary.time,
-        summary.broken_bonds,
-        summary.fragments,
-        summary.crack_triangles,
-    );
-    eprintln!(
-        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J{}",
-        summary.kinetic_energy,
-        summary.elastic_energy,
-        if summary.ball_kinetic_energy > 0.0 {
-            format!(", balls {:.4e} J", summary.ball_kinetic_energy)
-        } else {
-            String::new()
-        }
-    );
-    if let Some((builds, deepest)) = summary.self_contact {
-        eprintln!(
-            "self contact: up to {} pairs touching, deepest overlap {:.3e} m ({:.1}% of a \
-             contact distance), pair list built {builds} times",
-            deepest.pairs,
-            deepest.max_overlap,
-            100.0 * deepest.max_overlap_share
-        );
-    }
-    if summary.integrator == "event_search" {
-        let s = summary.solver;
-        eprintln!(
-            "event search: {} sub-steps ({:.2} per step), {} trial sub-steps undone",
-            s.substeps,
-            s.substeps as f64 / summary.steps.max(1) as f64,
-            s.rejected
-        );
-    }
-    if summary.integrator == "implicit" {
-        let it = summary.solver;
-        eprintln!(
-            "implicit: {} iterations ({:.1} per step, {} evaluations), {} steps at the \
-             iteration cap, {} factorisations ({:.2} s), solves {:.2} s, factor {:.1} MB",
-            it.iterations,
-            it.iterations as f64 / summary.steps.max(1) as f64,
-            it.evaluations,
-            it.capped_steps,
-            it.factorizations,
-            it.factor_seconds,
-            it.solve_seconds,
-            it.factor_bytes as f64 / 1e6
-        );
-    }
-    eprintln!(
-        "time per stage: physics {:.0}% (contact {:.0}%), topology {:.0}%, advection {:.0}%, \
-         output {:.0}% ({:.2} s)",
-        share(t.physics),
-        share(t.contact),
-        share(t.topology),
-        share(t.advect),
-        share(t.output),
-        t.output.as_secs_f64()
-    );
-    eprintln!(
-        "{} frames in {}",
-        summary.frames_written,
-        dir.join("frames").display()
-    );
-    if let Some((usd, took)) = &summary.usd {
-        eprintln!("{}", crate::export::describe(usd, *took));
-    }
-    Ok(())
-}
-
-/// Runs a thin-shell scene (`[shell]`), or resumes one from `checkpoint`: setup line, progress
-/// bar, summary.
-fn run_shell(
-    scene: &Path,
-    text: &str,
-    dir: &Path,
-    args: &RunArgs,
-    threads: usize,
-    checkpoint: Option<&Checkpoint>,
-) -> Result<()> {
-    let started = Instant::now();
-    let parsed = ShellScene::parse(text, scene)?;
-    let frames = checkpoint.map(|cp| cp.frames).or(args.frames);
-    let setup = ShellSetup::new(&parsed, frames, args.allow_large).map_err(|e| match e {
-        SceneError::TooLarge { .. } => {
-            anyhow::anyhow!("{e}; pass --allow-large to run it anyway")
-        }
-        other => other.into(),
-    })?;
-    let info = &setup.info;
-    eprintln!(
-        "{}: thin shell, {} vertices, {} triangles ({} free edges), thickness {:.3e} m, \
-         mass {:.4e} kg, dt {:.3e} s (stable limit {:.3e} s), {}, {} frames of {} steps on \
-         {threads} thread(s), setup {:.2} s",
-        scene.display(),
-        info.vertices,
-        info.triangles,
-        info.boundary_edges,
-        info.thickness,
-        info.mass,
-        info.dt,
-        info.dt_limit,
-        match (info.event_levels, info.newmark.is_some()) {
-            (0, false) => "explicit, no event search".to_string(),
-            (0, true) => "implicit Newmark, no event search".to_string(),
-            (k, false) => format!("explicit, event search to level {k}"),
-            (k, true) => format!("implicit Newmark, event search to level {k}"),
-        },
-        setup.frames,
-        setup.steps_per_frame,
-        started.elapsed().as_secs_f64(),
-    );
-    let info_levels = info.event_levels;
-    let interactive = std::io::stderr().is_terminal() && !args.quiet;
-    let mut bar = Bar::new(interactive, interrupt_flag()?);
-    let t0 = Instant::now();
-    let result = match checkpoint {
-        Some(cp) => perifrac_scene::resume_shell(setup, cp, dir, &mut bar),
-        None => perifrac_scene::run_shell(setup, dir, &mut bar),
-    };
-    bar.finish();
-    let wall = t0.elapsed().as_secs_f64();
-    let s = result.map_err(|e| stopped(e, scene, dir))?;
-    // steps taken by this process (a resumed run took the others before)
-    let resumed_at = checkpoint.map_or(0, steps_before);
-    let stepped = s.steps.saturating_sub(resumed_at);
-    eprintln!(
-        "done in {wall:.2} s: {} steps ({}{:.0} steps/s), t = {:.4e} s, {} triangles broken, {} \
-         pieces, {} triangles yielded",
-        s.steps,
-        if resumed_at > 0 {
-            format!("{stepped} after resuming, ")
-        } else {
-            String::new()
-        },
-        stepped as f64 / wall.max(1e-9),
-        s.time,
-        s.broken_triangles,
-        s.fragments,
-        s.yielded
-    );
-    eprintln!(
-        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J",
-        s.kinetic_energy, s.elastic_energy
-    );
-    if info_levels > 0 {
-        eprintln!(
-            "event search: {} sub-steps ({:.2} per step), {} trial sub-steps undone",
-            s.substeps,
-            s.substeps as f64 / s.steps.max(1) as f64,
-            s.rejected
-        );
-    } else if s.substeps != s.steps {
-        eprintln!(
-            "{} sub-steps ({:.2} per step): steps were cut where fracture lowered the stable \
-             step",
-            s.substeps,
-            s.substeps as f64 / s.steps.max(1) as f64,
-        );
-    }
-    if let Some(nm) = s.newmark {
-        eprintln!(
-            "Newmark: {} solves, {:.1} L-BFGS iterations each, {} at the cap, {} \
-             factorisations ({:.2} s)",
-            nm.steps,
-            nm.iterations as f64 / nm.steps.max(1) as f64,
-            nm.capped,
-            nm.factorizations,
-            nm.factor_seconds
-        );
-    }
-    let stepping = s.physics_time.as_secs_f64().max(1e-9);
-    eprintln!(
-        "speed: {:.3e} triangle updates/s ({:.3e} per thread){}",
-        s.triangle_updates as f64 / stepping,
-        s.triangle_updates as f64 / stepping / threads as f64,
-        match s.self_contact {
-            Some((secs, builds)) => format!(
-                ", self contact {secs:.2} s ({:.1}% of stepping, {builds} list builds)",
-                100.0 * secs / stepping
-            ),
-            None => String::new(),
-        }
-    );
-    if s.collider_seconds > 0.0 {
-        eprintln!(
-            "contact with grounds and balls: {:.2} s ({:.1}% of stepping)",
-            s.collider_seconds,
-            100.0 * s.collider_seconds / stepping
-        );
-    }
-    eprintln!(
-        "{} frames in {} (stepping {:.2} s, output {:.2} s)",
-        s.frames_written,
-        dir.join("frames").display(),
-        s.physics_time.as_secs_f64(),
-        s.output_time.as_secs_f64()
-    );
-    if let Some((usd, took)) = &s.usd {
-        eprintln!("{}", crate::export::describe(usd, *took));
-    }
+    report::summary(&summary, wall, resumed_at, threads, dir);
     Ok(())
 }
 

@@ -11,11 +11,9 @@ use std::path::{Path, PathBuf};
 
 use perifrac_checkpoint::{fnv1a, fnv1a_from, Header, Reader, Writer};
 
-use crate::driver::Driver;
+use crate::body::{AnyScene, Body, Plan};
 use crate::error::SceneError;
-use crate::load::Scene;
-use crate::output::FrameJson;
-use crate::setup::Setup;
+use crate::manifest::FrameJson;
 
 /// The checkpoint's file name in the run directory.
 pub const CHECKPOINT_FILE: &str = "checkpoint.bin";
@@ -58,56 +56,26 @@ pub struct Checkpoint {
     state_at: usize,
 }
 
-/// A hash of what a checkpoint's state fits: the scene text, the run's frames and steps, the
-/// step length, the particles and bonds, and the rest mesh (positions and tets) of a freshly
-/// built setup. A resumed run's setup must give the same.
-pub fn fingerprint(setup: &Setup) -> u64 {
-    let mut w = Writer::new();
-    w.str(&setup.scene_text);
-    w.usize(setup.frames);
-    w.u64(setup.steps_per_frame);
-    w.f64(setup.info.dt);
-    w.usize(setup.info.particles);
-    w.usize(setup.info.bonds);
-    let mesh = setup.driver.mesh();
-    w.array(mesh.rest_positions());
-    w.array(mesh.tets());
-    fnv1a_from(fnv1a(b"perifrac scene"), w.bytes())
-}
-
-/// Writes `dir/checkpoint.bin` atomically for `setup`'s run (`fingerprint` from
-/// [`fingerprint`] at its start) standing at `position`, with the frames recorded so far.
+/// Writes `dir/checkpoint.bin` atomically for the run `run` identifies, standing at
+/// `position`, with the frames recorded so far and what `body` saves of itself, under a header
+/// that says where the run stood.
 pub(crate) fn write(
     dir: &Path,
     run: &RunIdentity,
     position: Position,
     recorded: &[FrameJson],
-    driver: &Driver,
+    body: &dyn Body,
 ) -> Result<PathBuf, SceneError> {
     let summary = format!(
         "{} at step {} (t = {:.6e} s), stepping to frame {} of {}",
         run.scene_path
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
-        driver.solver().steps(),
-        driver.solver().time(),
+        body.steps(),
+        body.time(),
         position.frame,
         run.frames
     );
-    write_with(dir, run, position, recorded, summary, |w| driver.save(w))
-}
-
-/// Writes `dir/checkpoint.bin` atomically: the run's place and `recorded` frames as
-/// [`Checkpoint::read`] reads them, then what `state` writes (the state
-/// [`Checkpoint::state`] gives back), under a header with `summary`.
-pub(crate) fn write_with(
-    dir: &Path,
-    run: &RunIdentity,
-    position: Position,
-    recorded: &[FrameJson],
-    summary: String,
-    state: impl FnOnce(&mut Writer),
-) -> Result<PathBuf, SceneError> {
     let mut w = Writer::new();
     w.tag("run");
     w.str(&run.scene_path.to_string_lossy());
@@ -121,7 +89,7 @@ pub(crate) fn write_with(
         message: format!("cannot encode the frames for the checkpoint: {e}"),
     })?;
     w.str(&frames);
-    state(&mut w);
+    body.save(&mut w);
     let header = Header {
         program: program(),
         fingerprint: run.fingerprint,
@@ -133,7 +101,9 @@ pub(crate) fn write_with(
     Ok(path)
 }
 
-/// What identifies a run for its checkpoints.
+/// What identifies a run for its checkpoints: the scene, the frames and steps, and a
+/// fingerprint of the freshly built body (the scene text, frames, steps per frame, the step
+/// and what the body identifies itself by: its rest mesh and counts).
 #[derive(Debug, Clone)]
 pub(crate) struct RunIdentity {
     pub scene_path: PathBuf,
@@ -144,40 +114,21 @@ pub(crate) struct RunIdentity {
 }
 
 impl RunIdentity {
-    /// A shell run's: its fingerprint hashes the scene text, the frames and steps, the step,
-    /// and the fresh setup's rest mesh.
-    pub(crate) fn of_shell(setup: &crate::shell::ShellSetup) -> RunIdentity {
+    /// The identity of a run of `body` (freshly built) under `plan`.
+    pub(crate) fn of(plan: &Plan, body: &dyn Body) -> RunIdentity {
         let mut w = Writer::new();
-        w.str(&setup.scene_text);
-        w.usize(setup.frames);
-        w.u64(setup.steps_per_frame);
-        w.f64(setup.info.dt);
-        let mesh = setup.shell.shell().model().mesh();
-        w.array(mesh.vertices());
-        w.array(mesh.triangles());
-        let fingerprint = fnv1a_from(fnv1a(b"perifrac shell scene"), w.bytes());
-        let (path, text) = (&setup.scene_path, &setup.scene_text);
-        RunIdentity::new(path, text, setup.frames, setup.steps_per_frame, fingerprint)
-    }
-
-    pub(crate) fn of(setup: &Setup) -> RunIdentity {
-        let (path, text) = (&setup.scene_path, &setup.scene_text);
-        RunIdentity::new(
-            path,
-            text,
-            setup.frames,
-            setup.steps_per_frame,
-            fingerprint(setup),
-        )
-    }
-
-    fn new(path: &Path, text: &str, frames: usize, steps: u64, fingerprint: u64) -> RunIdentity {
+        w.str(&plan.scene_text);
+        w.usize(plan.frames);
+        w.u64(plan.steps_per_frame);
+        w.f64(plan.dt);
+        body.identify(&mut w);
+        let path = &plan.scene_path;
         RunIdentity {
             scene_path: std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
-            scene_text: text.to_owned(),
-            frames,
-            steps_per_frame: steps,
-            fingerprint,
+            scene_text: plan.scene_text.clone(),
+            frames: plan.frames,
+            steps_per_frame: plan.steps_per_frame,
+            fingerprint: fnv1a_from(fnv1a(b"perifrac run"), w.bytes()),
         }
     }
 }
@@ -263,14 +214,8 @@ impl Checkpoint {
     }
 
     /// Refuses the checkpoint in `dir` unless it was written for the run `id` identifies
-    /// (built afresh from the scene): the same scene text and fingerprint; `changes` says what
-    /// else could have changed.
-    pub(crate) fn check_identity(
-        &self,
-        dir: &Path,
-        id: &RunIdentity,
-        changes: &str,
-    ) -> Result<(), SceneError> {
+    /// (built afresh from the scene): the same scene text and fingerprint.
+    fn check_identity(&self, dir: &Path, id: &RunIdentity) -> Result<(), SceneError> {
         let bad = |message: String| SceneError::Checkpoint {
             path: dir.join(CHECKPOINT_FILE),
             message,
@@ -283,52 +228,36 @@ impl Checkpoint {
         }
         if id.fingerprint != self.header.fingerprint {
             return Err(bad(format!(
-                "the setup of {} is no longer the one the checkpoint was written for ({changes} \
-                 changed); rerun the scene",
+                "the setup of {} is no longer the one the checkpoint was written for (its mesh or \
+                 surface file, frames or step changed); rerun the scene",
                 id.scene_path.display()
             )));
         }
         Ok(())
     }
 
-    /// The state after the run's place (the driver's, or a shell run's).
-    pub(crate) fn state(&self) -> &[u8] {
-        &self.body[self.state_at..]
-    }
-
-    /// The shell scene as run, parsed again (for [`crate::resume_shell`]).
-    pub fn shell_scene(&self) -> Result<crate::ShellScene, SceneError> {
-        crate::ShellScene::parse(&self.scene_text, &self.scene_path)
-    }
-
-    /// Whether the run is a thin-shell scene's (resume it with [`crate::resume_shell`]).
-    pub fn is_shell(&self) -> bool {
-        crate::shell::is_shell_scene(&self.scene_text)
-    }
-
     /// The scene as run, parsed again (relative mesh paths resolve against the original
     /// scene file's directory).
-    pub fn scene(&self) -> Result<Scene, SceneError> {
-        Scene::parse(&self.scene_text, &self.scene_path)
+    pub fn scene(&self) -> Result<AnyScene, SceneError> {
+        AnyScene::parse(&self.scene_text, &self.scene_path)
     }
 
-    /// Checks that `setup` (built from [`Checkpoint::scene`] with [`Checkpoint::frames`]) is
-    /// the run the checkpoint was written for, then restores its driver to the saved state.
-    pub(crate) fn restore(&self, dir: &Path, setup: &mut Setup) -> Result<(), SceneError> {
-        self.check_identity(
-            dir,
-            &RunIdentity::of(setup),
-            "its mesh file, frames or step",
-        )?;
+    /// Checks that `id` (of a body built from [`Checkpoint::scene`] with
+    /// [`Checkpoint::frames`]) is the run the checkpoint was written for, then restores `body`
+    /// to the saved state.
+    pub(crate) fn restore(
+        &self,
+        dir: &Path,
+        id: &RunIdentity,
+        body: &mut dyn Body,
+    ) -> Result<(), SceneError> {
+        self.check_identity(dir, id)?;
         let bad = |message: String| SceneError::Checkpoint {
             path: dir.join(CHECKPOINT_FILE),
             message,
         };
         let mut r = Reader::new(&self.body[self.state_at..]);
-        setup
-            .driver
-            .restore(&mut r)
-            .and_then(|()| r.finish().map_err(Into::into))
-            .map_err(|e| bad(e.to_string()))
+        body.restore(&mut r).map_err(bad)?;
+        r.finish().map_err(|e| bad(e.to_string()))
     }
 }

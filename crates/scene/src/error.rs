@@ -99,18 +99,6 @@ pub enum SceneError {
         /// The checkpoint written.
         checkpoint: PathBuf,
     },
-    /// A shell run stopped on an instability; the frames written so far are kept.
-    #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
-    ShellStopped {
-        /// Simulated time (s).
-        time: f64,
-        /// Steps completed.
-        step: u64,
-        /// Frames written and kept.
-        frames: usize,
-        /// What stopped it.
-        cause: String,
-    },
     /// The run stopped (an instability); the frames written so far are kept.
     #[error("stopped at t = {time:.6e} s (step {step}) after writing {frames} frame(s): {cause}")]
     Stopped {
@@ -120,8 +108,8 @@ pub enum SceneError {
         step: u64,
         /// Frames written and kept.
         frames: usize,
-        /// What the solver reported.
-        cause: perifrac_physics::PhysicsError,
+        /// What the step reported.
+        cause: crate::body::StepError,
     },
 }
 

@@ -20,6 +20,7 @@
 
 #![warn(missing_docs)]
 
+pub mod body;
 pub mod budget;
 pub mod checkpoint;
 pub mod debris;
@@ -27,29 +28,27 @@ pub mod driver;
 pub mod error;
 pub mod fragments;
 pub mod load;
+pub mod manifest;
 pub mod memo;
 pub mod output;
 pub mod run;
 pub mod schema;
 pub mod setup;
 pub mod shell;
+pub mod sinks;
 pub mod usd;
 
+pub use body::{AnyScene, AnySetup, BodySummary, ShellSummary, SolidSummary, StepError};
 pub use budget::{Limits, WorkEstimate};
 pub use checkpoint::{Checkpoint, Position, CHECKPOINT_FILE};
 pub use driver::{Driver, StageTimes, StepReport};
 pub use error::SceneError;
 pub use fragments::{FragmentBirth, FragmentIds};
 pub use load::Scene;
+pub use manifest::{FrameJson, RunManifest, RUN_FORMAT};
 pub use memo::MemoDir;
-pub use output::{
-    check_output_dir, FrameWriter, IterationsJson, RunManifest, SearchJson, SelfContactJson,
-    SolverJson, POVRAY_MESH_NAME, RUN_FORMAT,
-};
+pub use output::{check_output_dir, POVRAY_MESH_NAME};
 pub use run::{resume, run, Observer, Progress, Silent, Summary};
 pub use setup::{CheckpointPolicy, OutputOptions, Setup, SetupInfo, SetupTimes};
-pub use shell::{
-    is_shell_scene, resume_shell, run_shell, ShellManifest, ShellScene, ShellSetup, ShellSetupInfo,
-    ShellSummary,
-};
+pub use shell::{is_shell_scene, ShellScene, ShellSetup, ShellSetupInfo};
 pub use usd::{export_usd, UsdLayout, UsdReport, DEFAULT_FPS};

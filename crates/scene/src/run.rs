@@ -1,15 +1,15 @@
-//! Running a prepared scene: steps between frames, frames into a run directory (layout in
-//! [`crate::output`]), progress to an [`Observer`], a [`Summary`] at the end.
+//! Running a prepared scene of either kind: steps between frames, frames through the sinks
+//! into a run directory (layout in [`crate::output`]), progress to an [`Observer`], a
+//! [`Summary`] at the end. One loop serves every [`crate::body::Body`].
 
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use crate::body::{AnySetup, Body, BodySummary, Plan, ShellSummary, SolidSummary};
 use crate::checkpoint::{self, Checkpoint, Position, RunIdentity, CHECKPOINT_FILE};
-
-use crate::driver::StageTimes;
 use crate::error::SceneError;
-use crate::output::FrameWriter;
-use crate::setup::Setup;
+use crate::output::{clear_output_dir, RunWriter};
+use crate::sinks::{Finished, Sinks};
 
 /// Where a run stands, handed to the [`Observer`] after every step and frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,7 +22,7 @@ pub struct Progress {
     pub steps: u64,
     /// Steps the run will take.
     pub total_steps: u64,
-    /// Bonds broken so far (pairs).
+    /// Bonds (solids) or triangles (shells) broken so far.
     pub broken_bonds: u64,
     /// Fragments at the last frame written.
     pub fragments: usize,
@@ -56,47 +56,58 @@ pub struct Summary {
     pub time: f64,
     /// The step (s).
     pub dt: f64,
-    /// Bonds broken (pairs).
-    pub broken_bonds: u64,
-    /// Fragments (connected pieces of the cut mesh) at the end.
+    /// Fragments (connected pieces) at the end.
     pub fragments: usize,
-    /// Crack triangles in the last surface (both sides counted).
-    pub crack_triangles: usize,
-    /// Kinetic energy of the particles at the end (J).
+    /// Kinetic energy of the body at the end (J).
     pub kinetic_energy: f64,
     /// Elastic energy at the end (J).
     pub elastic_energy: f64,
-    /// Kinetic energy of the dynamic balls at the end (J).
-    pub ball_kinetic_energy: f64,
     /// Frames written, the initial one included.
     pub frames_written: usize,
-    /// Wall time per stage (s).
-    pub stage_times: StageTimes,
-    /// The integrator's counters (iterations, factorisations and their wall times for the
-    /// implicit one; zeros for the explicit one).
-    pub solver: perifrac_physics::SolverStats,
-    /// The integrator's name.
-    pub integrator: &'static str,
-    /// Self contact, when the scene has it: pair-list builds, and the most pairs in contact
-    /// in a step with the deepest overlap (m, and as a share of the contact distance).
-    pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
     /// The USD cache, when the scene asked for one, and the wall time it took to write.
-    pub usd: Option<(crate::usd::UsdReport, std::time::Duration)>,
+    pub usd: Option<(crate::usd::UsdReport, Duration)>,
+    /// What the body counted.
+    pub body: BodySummary,
 }
 
-/// Runs `setup` to the end, writing frames into `dir`. On an instability the frames written
-/// so far stay, `run.json` records the error, and [`SceneError::Stopped`] is returned; a
-/// failure to write a frame (a full disk, say) is recorded in `run.json` too and returned.
-/// When the observer reports an interruption, a checkpoint is written and
+impl Summary {
+    /// A tet solid's counts (`None` for a shell).
+    pub fn solid(&self) -> Option<&SolidSummary> {
+        match &self.body {
+            BodySummary::Solid(s) => Some(s),
+            BodySummary::Shell(_) => None,
+        }
+    }
+
+    /// A thin shell's counts (`None` for a solid).
+    pub fn shell(&self) -> Option<&ShellSummary> {
+        match &self.body {
+            BodySummary::Shell(s) => Some(s),
+            BodySummary::Solid(_) => None,
+        }
+    }
+}
+
+/// Runs `setup` (a tet solid's [`crate::Setup`] or a shell's [`crate::ShellSetup`]) to the
+/// end, writing frames into `dir` (cleared of an earlier run's files first). On an instability
+/// the frames written so far stay, `run.json` records the error, and [`SceneError::Stopped`]
+/// is returned; a failure to write a frame (a full disk, say) is recorded in `run.json` too
+/// and returned. When the observer reports an interruption, a checkpoint is written and
 /// [`SceneError::Interrupted`] returned; [`resume`] continues from it.
-pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summary, SceneError> {
-    let id = RunIdentity::of(&setup);
-    let writer = FrameWriter::create(dir, &setup)?;
+pub fn run(
+    setup: impl Into<AnySetup>,
+    dir: &Path,
+    observer: &mut dyn Observer,
+) -> Result<Summary, SceneError> {
+    let (body, plan) = setup.into().split();
+    let id = RunIdentity::of(&plan, body.as_ref());
+    clear_output_dir(dir)?;
+    let writer = start_writer(dir, &plan, body.as_ref(), Vec::new())?;
     let start = Position {
         frame: 0,
         step_in_frame: 0,
     };
-    drive(setup, &id, writer, dir, start, observer)
+    drive(body, &plan, &id, writer, dir, start, observer)
 }
 
 /// Continues the run in `dir` from `checkpoint` (read by [`Checkpoint::read`]); `setup` must be
@@ -104,48 +115,61 @@ pub fn run(setup: Setup, dir: &Path, observer: &mut dyn Observer) -> Result<Summ
 /// mesh or step is refused. The files written are byte-identical to those of a run that was
 /// never interrupted.
 pub fn resume(
-    mut setup: Setup,
+    setup: impl Into<AnySetup>,
     checkpoint: &Checkpoint,
     dir: &Path,
     observer: &mut dyn Observer,
 ) -> Result<Summary, SceneError> {
-    // the identity of the fresh setup, before the restore cuts its mesh
-    let id = RunIdentity::of(&setup);
-    checkpoint.restore(dir, &mut setup)?;
-    let writer = FrameWriter::resume(dir, &setup, checkpoint.recorded.clone())?;
-    drive(setup, &id, writer, dir, checkpoint.position, observer)
+    let (mut body, plan) = setup.into().split();
+    // the identity of the fresh setup, before the restore changes its mesh
+    let id = RunIdentity::of(&plan, body.as_ref());
+    checkpoint.restore(dir, &id, body.as_mut())?;
+    let writer = start_writer(dir, &plan, body.as_ref(), checkpoint.recorded.clone())?;
+    drive(body, &plan, &id, writer, dir, checkpoint.position, observer)
+}
+
+fn start_writer(
+    dir: &Path,
+    plan: &Plan,
+    body: &dyn Body,
+    recorded: Vec<crate::manifest::FrameJson>,
+) -> Result<RunWriter, SceneError> {
+    RunWriter::start(
+        dir,
+        &plan.scene_path,
+        &plan.scene_text,
+        plan.fps,
+        body.head(),
+        recorded,
+        body.births(),
+    )
 }
 
 /// The step loop from `start` to the end.
 fn drive(
-    setup: Setup,
+    mut body: Box<dyn Body>,
+    plan: &Plan,
     id: &RunIdentity,
-    mut writer: FrameWriter,
+    mut writer: RunWriter,
     dir: &Path,
     start: Position,
     observer: &mut dyn Observer,
 ) -> Result<Summary, SceneError> {
-    let Setup {
-        mut driver,
-        frames,
-        steps_per_frame,
-        output,
-        info,
-        ..
-    } = setup;
-    let total_steps = (frames as u64).saturating_mul(steps_per_frame);
+    let frames = plan.frames;
+    let sinks = Sinks::from_output(plan.sinks);
+    let total_steps = (frames as u64).saturating_mul(plan.steps_per_frame);
     let mut progress = Progress {
-        time: driver.solver().time(),
-        duration: info.dt * total_steps as f64,
-        steps: driver.solver().steps(),
+        time: body.time(),
+        duration: plan.dt * total_steps as f64,
+        steps: body.steps(),
         total_steps,
-        broken_bonds: driver.broken_bonds(),
+        broken_bonds: body.broken(),
         fragments: writer.manifest().frames.last().map_or(1, |f| f.fragments),
         frames_written: writer.frames_written(),
     };
     let mut last_checkpoint = Instant::now();
     // stops with the error recorded in run.json (best effort: the error is what is reported)
-    let stop = |writer: &mut FrameWriter, e: SceneError| {
+    let stop = |writer: &mut RunWriter, e: SceneError| {
         let _ = writer.record_error(e.to_string());
         Err(e)
     };
@@ -156,37 +180,38 @@ fn drive(
             } else {
                 0
             };
-            for k in first..steps_per_frame {
-                if let Err(cause) = driver.step() {
+            for k in first..plan.steps_per_frame {
+                if let Err(cause) = body.step() {
                     let stopped = SceneError::Stopped {
-                        time: driver.solver().time(),
-                        step: driver.solver().steps(),
+                        time: body.time(),
+                        step: body.steps(),
                         frames: writer.frames_written(),
                         cause,
                     };
                     return stop(&mut writer, stopped);
                 }
-                progress.steps += 1;
-                progress.time = driver.solver().time();
-                progress.broken_bonds = driver.broken_bonds();
+                progress.steps = body.steps();
+                progress.time = body.time();
+                progress.broken_bonds = body.broken();
                 observer.step(&progress);
                 if observer.interrupted() {
                     let at = Position {
                         frame,
                         step_in_frame: k + 1,
                     };
-                    return interrupt(&mut writer, dir, id, at, &driver);
+                    return interrupt(&mut writer, dir, id, at, body.as_ref());
                 }
             }
         }
-        let written = writer
-            .write_frame(frame, &mut driver, frame == frames)
-            .map(|w| w.fragments);
-        let fragments = match written {
+        let written = body.frame(frame, &sinks, dir).and_then(|record| {
+            let fragments = record.fragments;
+            writer.record_frame(record, body.births(), frame == frames)?;
+            Ok(fragments)
+        });
+        progress.fragments = match written {
             Ok(fragments) => fragments,
             Err(e) => return stop(&mut writer, e),
         };
-        progress.fragments = fragments;
         progress.frames_written = writer.frames_written();
         observer.frame(&progress);
         if frame < frames {
@@ -195,12 +220,13 @@ fn drive(
                 step_in_frame: 0,
             };
             if observer.interrupted() {
-                return interrupt(&mut writer, dir, id, next, &driver);
+                return interrupt(&mut writer, dir, id, next, body.as_ref());
             }
-            if output.checkpoints.due(frame, last_checkpoint.elapsed()) {
+            if plan.checkpoints.due(frame, last_checkpoint.elapsed()) {
                 let t = Instant::now();
-                let saved = checkpoint::write(dir, id, next, &writer.manifest().frames, &driver);
-                driver.add_output_time(t.elapsed());
+                let recorded = &writer.manifest().frames;
+                let saved = checkpoint::write(dir, id, next, recorded, body.as_ref());
+                body.add_output_time(t.elapsed());
                 if let Err(e) = saved {
                     return stop(&mut writer, e);
                 }
@@ -208,20 +234,17 @@ fn drive(
             }
         }
     }
-    let usd = match output.usd {
-        Some(layout) => {
-            let t = Instant::now();
-            match crate::usd::export_usd(dir, None, layout, None) {
-                Ok(report) => {
-                    let took = t.elapsed();
-                    driver.add_output_time(took);
-                    Some((report, took))
-                }
-                Err(e) => return stop(&mut writer, e),
-            }
-        }
-        None => None,
+    let t = Instant::now();
+    let finished = match sinks.finish(dir) {
+        Ok(f) => f,
+        Err(e) => return stop(&mut writer, e),
     };
+    let took = t.elapsed();
+    body.add_output_time(took);
+    let usd = finished
+        .into_iter()
+        .map(|Finished::Usd(report)| (report, took))
+        .next();
     // finished: a checkpoint left from before would only resume what is done
     let _ = std::fs::remove_file(dir.join(CHECKPOINT_FILE));
     let last = writer
@@ -230,39 +253,31 @@ fn drive(
         .last()
         .expect("the initial frame is always written");
     Ok(Summary {
-        steps: driver.solver().steps(),
-        time: driver.solver().time(),
-        dt: info.dt,
-        broken_bonds: driver.broken_bonds(),
+        steps: body.steps(),
+        time: body.time(),
+        dt: plan.dt,
         fragments: last.fragments,
-        crack_triangles: last.crack_triangles,
         kinetic_energy: last.kinetic_energy,
         elastic_energy: last.elastic_energy,
-        ball_kinetic_energy: driver.colliders().map_or(0.0, |c| c.kinetic_energy()),
         frames_written: writer.frames_written(),
-        stage_times: driver.stage_times(),
-        solver: driver.solver().stats(),
-        self_contact: driver
-            .self_contact()
-            .map(|c| (c.rebuilds(), driver.self_contact_deepest())),
-        integrator: driver.solver().integrator_name(),
         usd,
+        body: body.summary(),
     })
 }
 
 /// Writes a checkpoint at `at`, records the interruption in `run.json` and returns it as the
 /// error.
 fn interrupt(
-    writer: &mut FrameWriter,
+    writer: &mut RunWriter,
     dir: &Path,
     id: &RunIdentity,
     at: Position,
-    driver: &crate::driver::Driver,
+    body: &dyn Body,
 ) -> Result<Summary, SceneError> {
-    let e = match checkpoint::write(dir, id, at, &writer.manifest().frames, driver) {
+    let e = match checkpoint::write(dir, id, at, &writer.manifest().frames, body) {
         Ok(path) => SceneError::Interrupted {
-            time: driver.solver().time(),
-            step: driver.solver().steps(),
+            time: body.time(),
+            step: body.steps(),
             frames: writer.frames_written(),
             checkpoint: path,
         },

@@ -88,7 +88,7 @@ impl Region {
     }
 }
 
-/// One material: Chen's elastoplastic model with fracture (MODEL.md section 2, the default) or
+/// One material: Chen's elastoplastic model with fracture (docs/model.md section 2, the default) or
 /// Xu's hyperelastic one (section 5). Every material of a scene uses the same model.
 #[derive(Debug, Clone, Deserialize, PartialEq, Default)]
 #[serde(deny_unknown_fields)]
@@ -180,7 +180,7 @@ pub struct SimulationSpec {
     pub refactor_share: Option<f64>,
     /// Chen: how the constants meet the discrete family: `"fitted"` (default: the dilatation
     /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle), `"none"`
-    /// (MODEL.md's constants) or `"ghosts"` (the fitted correction over families completed by
+    /// (docs/model.md's constants) or `"ghosts"` (the fitted correction over families completed by
     /// ghost particles mirrored across the mesh's boundary; with fracture a ghost is dropped
     /// once its source's family loses a bond). Xu: `"fitted"` (default: the dilatation's
     /// weights fitted per particle, back on the normalised ones once it loses a bond) or

@@ -40,7 +40,7 @@ use serde::Deserialize;
 
 use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
-use crate::output::{BallJson, Bounds, DebrisJson, GroundJson};
+use crate::manifest::{BallJson, Bounds, DebrisJson, GroundJson};
 
 /// Diffuse colour of the outer surface (linear RGB), as `perifrac render` shades it.
 const OUTSIDE_RGB: [f32; 3] = [0.62, 0.60, 0.55];

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use perifrac_io::read_ply_frame;
-use perifrac_scene::{run_shell, Scene, SceneError, ShellScene, ShellSetup, Silent};
+use perifrac_scene::{run, Scene, SceneError, ShellScene, ShellSetup, Silent};
 
 /// A small egg shell (320 triangles) dropped fast on the ground: it cracks within 0.5 ms.
 const EGG: &str = r#"
@@ -52,10 +52,10 @@ fn an_egg_scene_cracks_and_writes_frames_with_pieces_and_crack_walls() {
     let setup = ShellSetup::new(&scene, None, false).unwrap();
     assert_eq!(setup.info.triangles, 320);
     let dir = tempfile::tempdir().unwrap();
-    let summary = run_shell(setup, dir.path(), &mut Silent).unwrap();
+    let summary = run(setup, dir.path(), &mut Silent).unwrap();
     // Dropped at 4 m/s it breaks: the count depends on the stepping, so only that it broke
     // and came apart is asserted.
-    assert!(summary.broken_triangles > 0, "{summary:?}");
+    assert!(summary.shell().unwrap().broken_triangles > 0, "{summary:?}");
     let run: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("run.json")).unwrap())
             .unwrap();
@@ -225,8 +225,11 @@ fn punctured_sheets_do_not_run_away_at_their_cracks() {
         let setup = ShellSetup::new(&scene, None, false).unwrap();
         let mass = setup.info.mass;
         let dir = tempfile::tempdir().unwrap();
-        let summary = run_shell(setup, dir.path(), &mut Silent).unwrap();
-        assert!(summary.broken_triangles > 20, "{file}: {summary:?}");
+        let summary = run(setup, dir.path(), &mut Silent).unwrap();
+        assert!(
+            summary.shell().unwrap().broken_triangles > 20,
+            "{file}: {summary:?}"
+        );
         let bound = 0.5 * mass * 5.0 * 5.0;
         assert!(
             summary.kinetic_energy < bound,
@@ -255,8 +258,11 @@ fn no_piece_leaves_a_punctured_sheet_faster_than_a_bounce_off_the_ball() {
     scene.file.output.frames = Some(1);
     let setup = ShellSetup::new(&scene, None, false).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let summary = run_shell(setup, dir.path(), &mut Silent).unwrap();
-    assert!(summary.broken_triangles > 50, "{summary:?}");
+    let summary = run(setup, dir.path(), &mut Silent).unwrap();
+    assert!(
+        summary.shell().unwrap().broken_triangles > 50,
+        "{summary:?}"
+    );
     let frame = read_ply_frame(&dir.path().join("frames/surface_0001.ply")).unwrap();
     let fastest = frame
         .velocities
@@ -286,10 +292,17 @@ fn a_newmark_egg_runs_at_steps_past_the_explicit_limit_and_records_its_solves() 
         setup.info
     );
     let dir = tempfile::tempdir().unwrap();
-    let summary = run_shell(setup, dir.path(), &mut Silent).unwrap();
-    assert!(summary.broken_triangles > 0, "{summary:?}");
-    let nm = summary.newmark.expect("Newmark statistics");
-    assert_eq!(nm.steps, summary.substeps + summary.rejected);
+    let summary = run(setup, dir.path(), &mut Silent).unwrap();
+    assert!(summary.shell().unwrap().broken_triangles > 0, "{summary:?}");
+    let nm = summary
+        .shell()
+        .unwrap()
+        .newmark
+        .expect("Newmark statistics");
+    assert_eq!(
+        nm.steps,
+        summary.shell().unwrap().substeps + summary.shell().unwrap().rejected
+    );
     let run: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("run.json")).unwrap())
             .unwrap();

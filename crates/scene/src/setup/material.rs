@@ -280,7 +280,7 @@ fn chen_material(
         (None, Some(eps)) => {
             let eps = ctx.positive(&format!("{key}.yield_strain"), eps, "")?;
             // A_dev = 4 omega b ed with omega = delta / r and ed = eps r: |A_dev| = 4 delta b eps,
-            // with MODEL.md's b here; each particle rescales it to its own b_i (from_strain).
+            // with docs/model.md's b here; each particle rescales it to its own b_i (from_strain).
             let b = 15.0 * mat.shear_modulus / (2.0 * PI * horizon.powi(5));
             let a = 4.0 * horizon * b * eps;
             Some((0.5 * a * a, true))

@@ -67,8 +67,8 @@ pub mod defaults {
     /// seen within a step, never tunnelled through.
     pub const IMPLICIT_TRAVEL_FRACTION: f64 = 1.0;
     /// `perifrac run` warns when one particle in a hundred has a calibrated `b_i` over
-    /// MODEL.md's `b` past this: `b_i / b` is a full ball's moment over the particle's family's,
-    /// so such a particle has lost most of its neighbours (a tet far larger than the horizon,
+    /// docs/model.md's `b` past this: `b_i / b` is a full ball's moment over the particle's
+    /// family's, so such a particle has lost most of its neighbours (a tet far larger than the horizon,
     /// or a thin part one or two tets across) and its stiffness rests on a few bonds. Meshes of
     /// `perifrac mesh` stay under it (99th percentiles 2.8 to 6.2 on the shared surfaces at
     /// resolution 20), while their largest factors, on a few corner slivers, reach 12 to 31.
@@ -171,7 +171,7 @@ pub struct SetupInfo {
     pub model: &'static str,
     /// The integrator (`"explicit"`, `"implicit"`).
     pub integrator: &'static str,
-    /// How far the constants stray from MODEL.md's: per particle, the largest factor on its
+    /// How far the constants stray from docs/model.md's: per particle, the largest factor on its
     /// dilatation weights and Chen's factor on `b` (Xu's: the fitted dilatation's factors on
     /// the normalised weights, its bond term's all 1; `None` with Xu's normalised weights).
     pub correction: Option<Correction>,

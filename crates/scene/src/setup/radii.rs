@@ -1,4 +1,4 @@
-//! Contact radii of the particles (MODEL.md section 7).
+//! Contact radii of the particles (docs/model.md section 7).
 
 use std::f64::consts::PI;
 

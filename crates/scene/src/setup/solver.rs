@@ -118,7 +118,7 @@ impl AnyModel {
         }
     }
 
-    /// How Chen's constants stray from MODEL.md's (`None` for Xu's).
+    /// How Chen's constants stray from docs/model.md's (`None` for Xu's).
     pub(super) fn correction(&self) -> Option<Correction> {
         match self {
             AnyModel::Chen(m) => Some(m.correction()),

@@ -3,23 +3,22 @@
 //! thickness in place of a tet scene's `[mesh]`; one `[[material]]` gives Young's modulus,
 //! Poisson's ratio, density, and optionally yield and fracture strains; grounds, balls,
 //! anchors, initial velocities and frame output read as in tet scenes. [`ShellScene::load`]
-//! parses, [`ShellSetup::new`] validates and builds, [`run_shell`] steps and writes frames
-//! that `perifrac render` reads.
+//! parses, [`ShellSetup::new`] validates and builds, [`crate::run`] steps it and
+//! writes frames that `perifrac render` reads.
 //!
 //! ```no_run
-//! use perifrac_scene::{run_shell, ShellScene, ShellSetup, Silent};
+//! use perifrac_scene::{run, ShellScene, ShellSetup, Silent};
 //! let scene = ShellScene::load("data/scenes/shell_egg.toml".as_ref())?;
 //! let setup = ShellSetup::new(&scene, Some(4), false)?; // 4 frames after the initial one
-//! let summary = run_shell(setup, "out/egg".as_ref(), &mut Silent)?;
-//! println!("{} triangles broke, {} pieces", summary.broken_triangles, summary.fragments);
+//! let summary = run(setup, "out/egg".as_ref(), &mut Silent)?;
+//! let broken = summary.shell().map_or(0, |s| s.broken_triangles);
+//! println!("{broken} triangles broke, {} pieces", summary.fragments);
 //! # Ok::<(), perifrac_scene::SceneError>(())
 //! ```
 
-mod run;
 mod schema;
 mod setup;
 
-pub use run::{resume_shell, run_shell, NewmarkJson, ShellFrameJson, ShellManifest, ShellSummary};
 pub use schema::{
     ShellMaterialSpec, ShellOutputSpec, ShellSceneFile, ShellSimulationSpec, ShellSpec,
     TET_ONLY_KEYS,
