@@ -190,7 +190,7 @@ fn the_elastic_slab_recovers_and_the_plastic_slab_keeps_a_dent() {
 }
 
 #[test]
-#[ignore = "minutes: the README's impact-point figures at the scene files' own cells"]
+#[ignore = "minutes: docs/usage.md's impact-point figures at the scene files' own cells"]
 fn impact_point_at_the_files_cells() {
     for name in [
         "wall_elastic.toml",
