@@ -25,6 +25,7 @@ pub mod budget;
 pub mod checkpoint;
 pub mod debris;
 pub mod driver;
+pub mod environment;
 pub mod error;
 pub mod fragments;
 pub mod load;
