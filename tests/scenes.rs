@@ -89,7 +89,7 @@ fn every_scene_names_its_figure_loads_and_sets_up() {
         assert!(setup.info.particles > 1000, "{}", path.display());
         assert!(setup.info.dt > 0.0);
         // only the explicit step is bound by the stable limit
-        if setup.info.integrator == "explicit" {
+        if setup.info.integrator == perifrac_physics::IntegratorKind::Explicit {
             assert!(setup.info.dt <= setup.info.dt_limit, "{}", path.display());
         }
     }

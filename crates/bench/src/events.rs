@@ -70,7 +70,7 @@ fn run(name: &str, scene: &Scene, progress: &mut dyn FnMut(&str)) -> Result<RunE
     let wall = t0.elapsed().as_secs_f64();
     let d = setup.driver;
     let stats = d.solver().stats();
-    let evaluations = if d.solver().integrator_name() == "event_search" {
+    let evaluations = if d.solver().integrator() == perifrac_physics::IntegratorKind::EventSearch {
         stats.substeps + stats.rejected
     } else {
         steps

@@ -55,7 +55,8 @@ pub use ghost::{
 };
 pub use integrate::{
     EventSearch, EventSearchConfig, Explicit, ExplicitConfig, Implicit, ImplicitConfig, Integrator,
-    QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep, VelocityVerlet,
+    IntegratorKind, QuasiNewton, Searched, Simulation, Solver, SolverStats, StepInfo, TimeStep,
+    VelocityVerlet,
 };
 pub use loads::{AnchorMotion, Loads};
 pub use material::{

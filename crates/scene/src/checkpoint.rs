@@ -34,7 +34,7 @@ pub struct Position {
 }
 
 /// A checkpoint read back: the scene it belongs to and where its run stood; the state itself
-/// goes to [`Checkpoint::restore`].
+/// goes to [`crate::resume`].
 #[derive(Debug, Clone)]
 pub struct Checkpoint {
     /// What the file says of itself.

@@ -2,12 +2,17 @@
 //!
 //! A scene (TOML, [`schema`]) names the object (a built-in primitive or a mesh file), materials
 //! by region, the horizon, the time step (`"auto"` allowed), the duration, colliders (ground
-//! planes and balls), anchors, initial velocities, initial cracks and the frame output.
-//! [`Scene::load`] parses it with line and column in every error; [`Setup::new`] validates it and
-//! builds the mesh, the peridynamic model, the colliders and the solver without writing
-//! anything; [`run`] steps the [`Driver`] and writes frames into a run directory (layout in
-//! [`output`]), atomically, reporting progress to an [`Observer`]; an interrupted run leaves a
-//! [`Checkpoint`] that [`resume`] continues from, byte for byte.
+//! planes and balls), anchors, initial velocities, initial cracks and the frame output. A
+//! thin-shell scene ([`shell`]) names a triangle surface instead.
+//!
+//! - [`Scene::load`] parses a tet scene with line and column in every error; [`AnyScene::load`]
+//!   reads either kind.
+//! - [`Setup::new`] validates it and builds the mesh, the peridynamic model, the colliders and
+//!   the solver without writing anything; [`AnySetup::new`] builds either kind.
+//! - [`run()`] steps the body (a solid's [`Driver`], or a shell) in one loop for both, and writes
+//!   frames through the sinks ([`sinks`]) into a run directory (layout in [`output`]),
+//!   reporting progress to an [`Observer`].
+//! - An interrupted run leaves a [`Checkpoint`] that [`resume`] continues from, byte for byte.
 //!
 //! ```no_run
 //! use perifrac_scene::{run, Scene, Setup, Silent};

@@ -19,11 +19,7 @@ pub struct Scene {
 impl Scene {
     /// Reads and parses `path`.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Read {
-            file: path.to_path_buf(),
-            cause,
-        })?;
-        Scene::parse(&text, path)
+        Scene::parse(&read(path)?, path)
     }
 
     /// Parses `text` as if read from `path`.
@@ -71,6 +67,14 @@ impl Scene {
             _ => PathBuf::from("."),
         }
     }
+}
+
+/// The text of the scene file `path`.
+pub(crate) fn read(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|cause| SceneError::Read {
+        file: path.to_path_buf(),
+        cause,
+    })
 }
 
 /// 1-based line and column (in characters) of byte `offset` in `text`.

@@ -1,6 +1,6 @@
 //! Running a prepared scene of either kind: steps between frames, frames through the sinks
 //! into a run directory (layout in [`crate::output`]), progress to an [`Observer`], a
-//! [`Summary`] at the end. One loop serves every [`crate::body::Body`].
+//! [`Summary`] at the end. One loop serves every body (the crate's `Body` trait).
 
 use std::path::Path;
 use std::time::{Duration, Instant};

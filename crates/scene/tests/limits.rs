@@ -291,7 +291,10 @@ fn event_search_keys_are_checked() {
         assert!(e.contains(key) && e.contains(says), "{extra}: {e}");
     }
     let setup = Setup::with_limits(&scene(&with("event_search = true")), None, &limits()).unwrap();
-    assert_eq!(setup.info.integrator, "event_search");
+    assert_eq!(
+        setup.info.integrator,
+        perifrac_physics::IntegratorKind::EventSearch
+    );
 }
 
 #[test]

@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
+use perifrac_physics::IntegratorKind;
 use perifrac_scene::setup::defaults::{CORRECTION_WARNING, CORRECTION_WARNING_MAX};
+use perifrac_scene::setup::ModelKind;
 use perifrac_scene::{BodySummary, Setup, ShellSetup, ShellSummary, SolidSummary, Summary};
 
 /// The setup line of a tet solid, with its correction factors and warnings.
@@ -42,7 +44,7 @@ pub(super) fn solid_setup(scene: &Path, setup: &Setup, on: &str) {
         return;
     };
     let d = c.dilatation;
-    if info.model == "xu" {
+    if info.model == ModelKind::Xu {
         eprintln!(
             "correction of Xu's normalised dilatation weights (fitted): x{:.3} to x{:.3} (median \
              {:.3}, 99% under {:.3} in magnitude)",
@@ -169,7 +171,7 @@ fn solid_lines(s: &SolidSummary, steps: u64) {
         );
     }
     let it = s.solver;
-    if s.integrator == "event_search" {
+    if s.integrator == IntegratorKind::EventSearch {
         eprintln!(
             "event search: {} sub-steps ({:.2} per step), {} trial sub-steps undone",
             it.substeps,
@@ -177,7 +179,7 @@ fn solid_lines(s: &SolidSummary, steps: u64) {
             it.rejected
         );
     }
-    if s.integrator == "implicit" {
+    if s.integrator == IntegratorKind::Implicit {
         eprintln!(
             "implicit: {} iterations ({:.1} per step, {} evaluations), {} steps at the \
              iteration cap, {} factorisations ({:.2} s), solves {:.2} s, factor {:.1} MB",

@@ -221,8 +221,8 @@ impl<M: ForceModel> Integrator<M> for EventSearch {
         self.dt
     }
 
-    fn name(&self) -> &'static str {
-        "event_search"
+    fn kind(&self) -> crate::integrate::IntegratorKind {
+        crate::integrate::IntegratorKind::EventSearch
     }
 
     fn stats(&self) -> SolverStats {

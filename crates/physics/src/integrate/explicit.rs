@@ -188,8 +188,8 @@ impl<M: ForceModel> Integrator<M> for VelocityVerlet {
         self.dt
     }
 
-    fn name(&self) -> &'static str {
-        "explicit"
+    fn kind(&self) -> crate::integrate::IntegratorKind {
+        crate::integrate::IntegratorKind::Explicit
     }
 
     fn save_state(&self, w: &mut Writer) {

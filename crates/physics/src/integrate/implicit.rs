@@ -681,8 +681,8 @@ impl<M: QuasiNewtonModel> Integrator<M> for QuasiNewton {
         self.config.dt
     }
 
-    fn name(&self) -> &'static str {
-        "implicit"
+    fn kind(&self) -> crate::integrate::IntegratorKind {
+        crate::integrate::IntegratorKind::Implicit
     }
 
     fn stats(&self) -> SolverStats {

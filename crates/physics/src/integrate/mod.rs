@@ -9,4 +9,4 @@ mod step_matrix;
 pub use event_search::{EventSearch, EventSearchConfig, Searched};
 pub use explicit::{Explicit, ExplicitConfig, TimeStep, VelocityVerlet};
 pub use implicit::{Implicit, ImplicitConfig, QuasiNewton, StepInfo};
-pub use simulation::{Integrator, Simulation, Solver, SolverStats};
+pub use simulation::{Integrator, IntegratorKind, Simulation, Solver, SolverStats};

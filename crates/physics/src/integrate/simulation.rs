@@ -36,6 +36,34 @@ pub struct SolverStats {
     pub rejected: u64,
 }
 
+/// The integrators a [`Solver`] can step with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Velocity Verlet under the stable step.
+    Explicit,
+    /// Velocity Verlet sub-stepped by the event search.
+    EventSearch,
+    /// The quasi-Newton implicit step.
+    Implicit,
+}
+
+impl IntegratorKind {
+    /// Its name in reports and checkpoints.
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Explicit => "explicit",
+            IntegratorKind::EventSearch => "event_search",
+            IntegratorKind::Implicit => "implicit",
+        }
+    }
+}
+
+impl std::fmt::Display for IntegratorKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// An integrator: a stage that advances a [`State`] under a force model, loads and an
 /// environment by one step of its own length.
 pub trait Integrator<M: ForceModel>: Send {
@@ -55,8 +83,8 @@ pub trait Integrator<M: ForceModel>: Send {
     /// The step (s).
     fn dt(&self) -> f64;
 
-    /// Short name for reports (`"explicit"`, `"implicit"`).
-    fn name(&self) -> &'static str;
+    /// Which integrator this is.
+    fn kind(&self) -> IntegratorKind;
 
     /// Counters so far.
     fn stats(&self) -> SolverStats {
@@ -192,7 +220,7 @@ impl<M: ForceModel, I: Integrator<M>> Simulation<M, I> {
     /// bit.
     pub fn save(&self, w: &mut Writer) {
         w.tag("simulation");
-        w.str(self.integrator.name());
+        w.str(self.integrator.kind().name());
         self.state.save(w);
         self.loads.save(w);
         self.model.save_state(w);
@@ -203,12 +231,12 @@ impl<M: ForceModel, I: Integrator<M>> Simulation<M, I> {
     pub fn restore(&mut self, r: &mut Reader) -> Result<(), PhysicsError> {
         r.tag("simulation")?;
         let name = r.str("integrator")?;
-        if name != self.integrator.name() {
+        if name != self.integrator.kind().name() {
             return Err(CheckpointError::Invalid {
                 what: "integrator".into(),
                 message: format!(
                     "the checkpoint was stepped {name}, this run {}",
-                    self.integrator.name()
+                    self.integrator.kind().name()
                 ),
             }
             .into());
@@ -239,8 +267,8 @@ pub trait Solver: Send {
     fn kinetic_energy(&self) -> f64;
     /// Elastic energy at the current positions (J).
     fn elastic_energy(&mut self) -> f64;
-    /// The integrator's name (`"explicit"`, `"implicit"`).
-    fn integrator_name(&self) -> &'static str;
+    /// Which integrator steps it.
+    fn integrator(&self) -> IntegratorKind;
     /// The integrator's counters.
     fn stats(&self) -> SolverStats;
     /// Writes the state for a checkpoint or a snapshot ([`Simulation::save`]).
@@ -291,8 +319,8 @@ impl<M: ForceModel, I: Integrator<M>> Solver for Simulation<M, I> {
     fn elastic_energy(&mut self) -> f64 {
         Simulation::elastic_energy(self)
     }
-    fn integrator_name(&self) -> &'static str {
-        self.integrator.name()
+    fn integrator(&self) -> IntegratorKind {
+        self.integrator.kind()
     }
     fn stats(&self) -> SolverStats {
         self.integrator.stats()

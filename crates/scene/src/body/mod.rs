@@ -1,6 +1,6 @@
-//! What the run loop steps: a body. A tet solid ([`solid`]: the [`crate::Driver`] over a
-//! peridynamic solver) and a thin shell ([`shell`]) both implement [`Body`], so one run loop,
-//! one checkpoint convention, one `run.json` and one summary serve both.
+//! What the run loop steps: a body. A tet solid (`solid.rs`: the [`crate::Driver`] over a
+//! peridynamic solver) and a thin shell (`shell.rs`) both implement the crate's `Body` trait,
+//! so one run loop, one checkpoint convention, one `run.json` and one summary serve both.
 
 pub(crate) mod shell;
 pub(crate) mod solid;
@@ -108,11 +108,7 @@ pub enum AnyScene {
 impl AnyScene {
     /// Reads and parses `path`: a thin shell when it has a `[shell]` table, else a tet solid.
     pub fn load(path: &Path) -> Result<AnyScene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Read {
-            file: path.to_path_buf(),
-            cause,
-        })?;
-        AnyScene::parse(&text, path)
+        AnyScene::parse(&crate::load::read(path)?, path)
     }
 
     /// Parses `text` as if read from `path` (relative files resolve against its directory).

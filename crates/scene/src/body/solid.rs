@@ -19,8 +19,9 @@ use crate::manifest::{
     IterationsJson, SearchJson, SelfContactJson, SolidFrameJson, SolidJson, SolverJson,
     MAIN_MASS_SHARE,
 };
-use crate::setup::{bounds, OutputOptions, Setup, SetupInfo};
+use crate::setup::{bounds, ModelKind, OutputOptions, Setup, SetupInfo};
 use crate::sinks::{FrameView, ParticlesView, SinkChoice, Sinks};
+use perifrac_physics::IntegratorKind;
 
 /// A tet solid's part of a run's summary.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,8 +37,8 @@ pub struct SolidSummary {
     /// The integrator's counters (iterations, factorisations and their wall times for the
     /// implicit one; zeros for the explicit one).
     pub solver: perifrac_physics::SolverStats,
-    /// The integrator's name.
-    pub integrator: &'static str,
+    /// The integrator.
+    pub integrator: IntegratorKind,
     /// Self contact, when the scene has it: pair-list builds, and the most pairs in contact
     /// in a step with the deepest overlap (m, and as a share of the contact distance).
     pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
@@ -102,12 +103,12 @@ impl Body for Solid {
                 particles: info.particles,
                 bonds: info.bonds,
                 horizon: info.horizon,
-                solver: (info.model != "chen" || info.integrator != "explicit").then(|| {
-                    SolverJson {
-                        model: info.model.into(),
-                        integrator: info.integrator.into(),
-                    }
-                }),
+                solver: (info.model != ModelKind::Chen
+                    || info.integrator != IntegratorKind::Explicit)
+                    .then(|| SolverJson {
+                        model: info.model.name().into(),
+                        integrator: info.integrator.name().into(),
+                    }),
                 correction: info.correction.map(|c| CorrectionJson {
                     dilatation: c.dilatation.into(),
                     deviatoric: c.deviatoric.into(),
@@ -178,7 +179,7 @@ impl Body for Solid {
             ball_kinetic_energy: d.colliders().map_or(0.0, |c| c.kinetic_energy()),
             stage_times: d.stage_times(),
             solver: d.solver().stats(),
-            integrator: d.solver().integrator_name(),
+            integrator: d.solver().integrator(),
             self_contact: d
                 .self_contact()
                 .map(|c| (c.rebuilds(), d.self_contact_deepest())),
@@ -276,7 +277,7 @@ impl Solid {
         let elastic_energy = driver.solver_mut().elastic_energy();
         let solver = driver.solver();
         let stats = solver.stats();
-        let integrator = solver.integrator_name();
+        let integrator = solver.integrator();
         Ok(FrameJson {
             index,
             time,
@@ -289,7 +290,7 @@ impl Solid {
             fragments: pieces.count,
             kinetic_energy,
             elastic_energy,
-            search: (integrator == "event_search").then_some(SearchJson {
+            search: (integrator == IntegratorKind::EventSearch).then_some(SearchJson {
                 substeps: stats.substeps,
                 rejected: stats.rejected,
             }),
@@ -298,7 +299,7 @@ impl Solid {
                 debris: files.debris,
                 broken_bonds: driver.broken_bonds(),
                 crack_triangles,
-                implicit: (integrator == "implicit").then_some(IterationsJson {
+                implicit: (integrator == IntegratorKind::Implicit).then_some(IterationsJson {
                     iterations: stats.iterations,
                     capped_steps: stats.capped_steps,
                     evaluations: stats.evaluations,

@@ -11,6 +11,7 @@ use crate::schema::{MaterialSpec, SceneFile};
 
 use super::check::Ctx;
 use super::defaults;
+use super::ModelKind;
 
 /// The scene's materials, all of one model.
 pub(super) enum Materials {
@@ -49,10 +50,10 @@ impl Materials {
     }
 
     /// The model's name in the scene file.
-    pub(super) fn name(&self) -> &'static str {
+    pub(super) fn kind(&self) -> ModelKind {
         match self {
-            Materials::Chen(_) => "chen",
-            Materials::Xu(_) => "xu",
+            Materials::Chen(_) => ModelKind::Chen,
+            Materials::Xu(_) => ModelKind::Xu,
         }
     }
 }
@@ -67,14 +68,14 @@ pub(super) fn materials_by_region(
 ) -> Result<(Materials, Vec<u16>), SceneError> {
     let model = scene_model(ctx, f)?;
     let materials = match model {
-        "chen" => Materials::Chen(
+        ModelKind::Chen => Materials::Chen(
             f.material
                 .iter()
                 .enumerate()
                 .map(|(i, m)| chen_material(ctx, i, m, horizon))
                 .collect::<Result<Vec<_>, _>>()?,
         ),
-        _ => Materials::Xu(
+        ModelKind::Xu => Materials::Xu(
             f.material
                 .iter()
                 .enumerate()
@@ -102,13 +103,13 @@ pub(super) fn materials_by_region(
     Ok((materials, ids))
 }
 
-/// The model every material names (`"chen"` when none does); mixing models is refused.
-pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<&'static str, SceneError> {
-    let mut chosen: Option<(&'static str, usize)> = None;
+/// The model every material names (Chen's when none does); mixing models is refused.
+pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<ModelKind, SceneError> {
+    let mut chosen: Option<(ModelKind, usize)> = None;
     for (i, m) in f.material.iter().enumerate() {
         let this = match m.model.as_deref() {
-            None | Some("chen") => "chen",
-            Some("xu") => "xu",
+            None | Some("chen") => ModelKind::Chen,
+            Some("xu") => ModelKind::Xu,
             Some(other) => {
                 return Err(ctx.err(
                     format!("material[{i}].model"),
@@ -127,7 +128,7 @@ pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<&'static str, Scen
             _ => {}
         }
     }
-    Ok(chosen.map_or("chen", |(m, _)| m))
+    Ok(chosen.map_or(ModelKind::Chen, |(m, _)| m))
 }
 
 /// The stiffest modulus a material may have (Pa): a thousand times diamond's Young's modulus

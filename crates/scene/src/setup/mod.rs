@@ -19,7 +19,9 @@ mod xu_material;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use perifrac_physics::{Correction, Discretization, EstimateMemo, GhostReport, PhysicsError};
+use perifrac_physics::{
+    Correction, Discretization, EstimateMemo, GhostReport, IntegratorKind, PhysicsError,
+};
 
 use crate::budget::{self, Limits, MeshShape, WorkEstimate};
 use crate::driver::Driver;
@@ -76,6 +78,31 @@ pub mod defaults {
     /// ... or when any passes this: that particle rings at about the square root of it times
     /// the frequency of a full family, and sets the stable step alone.
     pub const CORRECTION_WARNING_MAX: f64 = 100.0;
+}
+
+/// The peridynamic force models a solid scene can use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// Chen et al. 2018: elastoplastic, state-based (docs/model.md section 2).
+    Chen,
+    /// Xu et al. 2018: hyperelastic (docs/model.md section 5).
+    Xu,
+}
+
+impl ModelKind {
+    /// Its name in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Chen => "chen",
+            ModelKind::Xu => "xu",
+        }
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// What the run writes besides the surface PLY.
@@ -167,10 +194,10 @@ pub struct SetupInfo {
     pub rest_bounds: ([f64; 3], [f64; 3]),
     /// Crack faces cut at the start.
     pub precrack_faces: usize,
-    /// The force model (`"chen"`, `"xu"`).
-    pub model: &'static str,
-    /// The integrator (`"explicit"`, `"implicit"`).
-    pub integrator: &'static str,
+    /// The force model.
+    pub model: ModelKind,
+    /// The integrator.
+    pub integrator: IntegratorKind,
     /// How far the constants stray from docs/model.md's: per particle, the largest factor on its
     /// dilatation weights and Chen's factor on `b` (Xu's: the fitted dilatation's factors on
     /// the normalised weights, its bond term's all 1; `None` with Xu's normalised weights).
@@ -264,7 +291,7 @@ impl Setup {
         let f = &scene.file;
         check::check_settings(&ctx, f)?;
         let kind = solver::kind(&ctx, &f.simulation)?;
-        if kind == solver::Kind::Implicit && material::scene_model(&ctx, f)? == "chen" {
+        if kind == solver::Kind::Implicit && material::scene_model(&ctx, f)? == ModelKind::Chen {
             return Err(ctx.err(
                 "simulation.integrator",
                 "\"implicit\" needs an energy with a rest stiffness: give the materials \
@@ -479,8 +506,8 @@ impl Setup {
             travel_limit,
             dt,
             mass: solver.model().masses().iter().sum(),
-            model: materials.name(),
-            integrator: solver.integrator_name(),
+            model: materials.kind(),
+            integrator: solver.integrator(),
             up: math::up_from_gravity(gravity),
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,

@@ -3,7 +3,7 @@
 //! thickness in place of a tet scene's `[mesh]`; one `[[material]]` gives Young's modulus,
 //! Poisson's ratio, density, and optionally yield and fracture strains; grounds, balls,
 //! anchors, initial velocities and frame output read as in tet scenes. [`ShellScene::load`]
-//! parses, [`ShellSetup::new`] validates and builds, [`crate::run`] steps it and
+//! parses, [`ShellSetup::new`] validates and builds, [`crate::run()`] steps it and
 //! writes frames that `perifrac render` reads.
 //!
 //! ```no_run

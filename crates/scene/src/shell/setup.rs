@@ -63,11 +63,7 @@ pub fn is_shell_scene(text: &str) -> bool {
 impl ShellScene {
     /// Reads and parses `path`.
     pub fn load(path: &Path) -> Result<ShellScene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Read {
-            file: path.to_path_buf(),
-            cause,
-        })?;
-        ShellScene::parse(&text, path)
+        ShellScene::parse(&crate::load::read(path)?, path)
     }
 
     /// Parses `text` as if read from `path`: a key only tet scenes take is refused by name
