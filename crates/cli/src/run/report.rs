@@ -211,10 +211,16 @@ fn solid_lines(s: &SolidSummary, steps: u64) {
 /// A thin shell's sub-steps, Newmark solves, speed and contact time.
 fn shell_lines(s: &ShellSummary, steps: u64, threads: usize) {
     let per_step = s.substeps as f64 / steps.max(1) as f64;
-    if s.rejected > 0 || s.substeps != steps {
+    if s.event_levels > 0 {
         eprintln!(
-            "{} sub-steps ({per_step:.2} per step), {} trial sub-steps undone",
+            "event search: {} sub-steps ({per_step:.2} per step), {} trial sub-steps undone",
             s.substeps, s.rejected
+        );
+    } else if s.substeps != steps {
+        eprintln!(
+            "{} sub-steps ({per_step:.2} per step): steps were cut where fracture lowered the \
+             stable step",
+            s.substeps
         );
     }
     if let Some(nm) = s.newmark {

@@ -34,6 +34,8 @@ pub struct ShellSummary {
     pub substeps: u64,
     /// Trial sub-steps discarded.
     pub rejected: u64,
+    /// The event search's finest level (0: plain steps, cut where fracture lowers the limit).
+    pub event_levels: u32,
     /// Wall time stepping.
     pub physics_time: Duration,
     /// Wall time writing frames.
@@ -219,6 +221,7 @@ impl Body for Shell {
             yielded: s.model().yielded(),
             substeps: stats.substeps,
             rejected: stats.rejected,
+            event_levels: self.info.event_levels,
             physics_time: self.physics_time,
             output_time: self.output_time,
             triangle_updates: self.updates,
