@@ -1,5 +1,6 @@
-//! The step loop of DESIGN.md as a short list of named stages: release anchors, physics with
-//! contact forces, cut the mesh along the bonds that broke, advect its vertices. Each stage is
+//! A solid's step as a short list of named stages: release anchors, physics under the
+//! influences (contact forces, loads), cut the mesh along the bonds that broke, advect its
+//! vertices. Each stage is
 //! timed; the progress bar, the summary and the speed benchmark read the same counters.
 
 use std::time::{Duration, Instant};
