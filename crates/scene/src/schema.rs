@@ -204,7 +204,7 @@ pub struct SimulationSpec {
     /// Event search: a bond may break this share past its threshold (default 0.1).
     pub overshoot: Option<f64>,
     /// Contact between particles that share no intact bond: fragments and the faces of cracks
-    /// push each other apart (default false).
+    /// push each other apart (default: on when a material can break).
     pub self_contact: Option<bool>,
     /// Self contact: penalty stiffness of a particle as a multiple of `E r_p` (default 0.25).
     pub self_contact_stiffness: Option<f64>,
