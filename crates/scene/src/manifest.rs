@@ -337,26 +337,26 @@ pub struct SearchJson {
     pub rejected: u64,
 }
 
-/// The grounds and balls of `colliders` in `run.json`'s shape (none without colliders).
-pub(crate) fn collider_json(
-    colliders: Option<&perifrac_contact::Colliders>,
-) -> (Vec<GroundJson>, Vec<BallJson>) {
-    let Some(c) = colliders else {
-        return (Vec::new(), Vec::new());
-    };
-    let grounds = c
-        .grounds()
-        .map(|g| GroundJson {
-            point: g.point,
-            normal: g.normal,
-        })
-        .collect();
-    let balls = c
-        .balls()
-        .map(|b| BallJson {
-            center: b.center,
-            radius: b.radius,
-        })
-        .collect();
-    (grounds, balls)
+/// The ground planes of `colliders` in `run.json`'s shape (none without colliders).
+pub(crate) fn grounds_json(colliders: Option<&perifrac_contact::Colliders>) -> Vec<GroundJson> {
+    colliders.map_or_else(Vec::new, |c| {
+        c.grounds()
+            .map(|g| GroundJson {
+                point: g.point,
+                normal: g.normal,
+            })
+            .collect()
+    })
+}
+
+/// The balls of `colliders` where they are now, in `run.json`'s shape.
+pub(crate) fn balls_json(colliders: Option<&perifrac_contact::Colliders>) -> Vec<BallJson> {
+    colliders.map_or_else(Vec::new, |c| {
+        c.balls()
+            .map(|b| BallJson {
+                center: b.center,
+                radius: b.radius,
+            })
+            .collect()
+    })
 }

@@ -14,7 +14,7 @@ use super::{Body, BodySummary, Head, Plan, StepError};
 use crate::error::SceneError;
 use crate::fragments::{FragmentBirth, FragmentIds};
 use crate::manifest::{
-    collider_json, BodyJson, Bounds, FrameBodyJson, FrameJson, NewmarkJson, SearchJson,
+    balls_json, grounds_json, BodyJson, Bounds, FrameBodyJson, FrameJson, NewmarkJson, SearchJson,
     ShellFrameJson, ShellJson, MAIN_MASS_SHARE,
 };
 use crate::setup::math::bounds;
@@ -122,7 +122,7 @@ pub(crate) fn split(setup: ShellSetup) -> (Box<dyn Body>, Plan) {
 impl Body for Shell {
     fn head(&self) -> Head {
         let info = &self.info;
-        let (grounds, _) = collider_json(self.shell.shell().colliders());
+        let grounds = grounds_json(self.shell.shell().colliders());
         Head {
             up: info.up,
             rest_bounds: Bounds::of(info.rest_bounds),
@@ -312,7 +312,7 @@ impl Shell {
             .iter()
             .map(|c| c.iter().filter(|&&k| k).count())
             .sum();
-        let (_, balls) = collider_json(shell.colliders());
+        let balls = balls_json(shell.colliders());
         let stats = searched.stats();
         Ok(FrameJson {
             index,

@@ -15,8 +15,8 @@ use crate::driver::{Driver, StageTimes};
 use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
 use crate::manifest::{
-    collider_json, BodyJson, Bounds, CorrectionJson, FrameBodyJson, FrameJson, GhostsJson,
-    IterationsJson, SearchJson, SelfContactJson, SolidFrameJson, SolidJson, SolverJson,
+    balls_json, grounds_json, BodyJson, Bounds, CorrectionJson, FrameBodyJson, FrameJson,
+    GhostsJson, IterationsJson, SearchJson, SelfContactJson, SolidFrameJson, SolidJson, SolverJson,
     MAIN_MASS_SHARE,
 };
 use crate::setup::{bounds, ModelKind, OutputOptions, Setup, SetupInfo};
@@ -91,7 +91,7 @@ pub(crate) fn split(setup: Setup) -> (Box<dyn Body>, Plan) {
 impl Body for Solid {
     fn head(&self) -> Head {
         let info = &self.info;
-        let (grounds, _) = collider_json(self.driver.colliders());
+        let grounds = grounds_json(self.driver.colliders());
         Head {
             up: info.up,
             rest_bounds: Bounds::of(info.rest_bounds),
@@ -270,7 +270,7 @@ impl Solid {
         let piece_mass = piece_masses(&pieces.piece_of_tet, pieces.count, driver.masses());
         let crack_triangles = surface.crack.iter().filter(|&&c| c != 0).count();
         self.crack_triangles = crack_triangles;
-        let (_, balls) = collider_json(driver.colliders());
+        let balls = balls_json(driver.colliders());
         let (time, step) = (driver.solver().time(), driver.solver().steps());
         let kinetic_energy = driver.solver().kinetic_energy();
         // the energy first: the counters are read after it, as they always were

@@ -123,11 +123,6 @@ impl Sinks {
         Sinks { sinks }
     }
 
-    /// Adds a sink at the end.
-    pub fn push(&mut self, sink: Box<dyn FrameSink>) {
-        self.sinks.push(sink);
-    }
-
     /// Whether any sink needs the particles.
     pub fn wants_particles(&self) -> bool {
         self.sinks.iter().any(|s| s.wants_particles())
