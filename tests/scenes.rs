@@ -10,6 +10,7 @@ mod common;
 
 use std::path::PathBuf;
 
+use perifrac_scene::schema::{ChenCorrection, ChenSettings, GhostFitKey, Model};
 use perifrac_scene::{Scene, Setup, ShellScene, ShellSetup};
 
 fn scenes_dir() -> PathBuf {
@@ -395,8 +396,10 @@ fn ghosts_tear_a_sheet_through_its_initial_cracks() {
     // 27).
     let mut scene = load("sheet_tear.toml");
     scene.file.mesh.cells = Some([20, 10, 2]);
-    scene.file.simulation.correction = Some("ghosts".into());
-    scene.file.simulation.ghost_fit = Some("affine".into());
+    scene.file.simulation.model = Model::Chen(ChenSettings {
+        correction: Some(ChenCorrection::Ghosts),
+        ghost_fit: Some(GhostFitKey::Affine),
+    });
     let mut setup = Setup::new(&scene, None).unwrap();
     assert!(setup.info.precrack_faces > 0);
     let ghosts = setup.info.ghosts.clone().expect("the ghosts' report");
@@ -419,7 +422,10 @@ fn ghosts_are_a_scene_option() {
     // across the slab's boundary (`correction = "ghosts"`, quadratic by default)
     let mut scene = load("wall_elastic.toml");
     scene.file.mesh.cells = Some([12, 12, 2]);
-    scene.file.simulation.correction = Some("ghosts".into());
+    scene.file.simulation.model = Model::Chen(ChenSettings {
+        correction: Some(ChenCorrection::Ghosts),
+        ghost_fit: None,
+    });
     let mut setup = Setup::new(&scene, None).unwrap();
     let ghosts = setup.info.ghosts.clone().expect("the ghosts' report");
     let n = setup.info.particles;
@@ -446,7 +452,10 @@ fn ghosts_are_a_scene_option() {
     assert!(y.iter().flatten().all(|c| c.is_finite()));
     // refused: a fit named without them
     let mut stray = load("wall_elastic.toml");
-    stray.file.simulation.ghost_fit = Some("affine".into());
+    stray.file.simulation.model = Model::Chen(ChenSettings {
+        correction: None,
+        ghost_fit: Some(GhostFitKey::Affine),
+    });
     let Err(err) = Setup::new(&stray, None) else {
         panic!("ghost_fit without ghosts was accepted");
     };

@@ -120,7 +120,7 @@ const BAD: &[(&str, &str, &str, &str)] = &[
         "unknown integrator",
         "integrator = \"implicit\"",
         "integrator = \"implict\"",
-        "expected \"explicit\" or \"implicit\"",
+        "simulation.integrator: unknown variant `implict`, expected `explicit` or `implicit`",
     ),
     (
         "unknown energy",
@@ -144,7 +144,7 @@ const BAD: &[(&str, &str, &str, &str)] = &[
         "plasticity in Xu",
         "density = 1000.0",
         "density = 1000.0\nyield_strain = 0.01",
-        "no plasticity",
+        "material[0].yield_strain: a key of model = \"chen\"; this table's model is \"xu\"",
     ),
     (
         "implicit with Chen",

@@ -1,8 +1,11 @@
 //! Reading a scene file: TOML parsing with line and column in every syntax or schema error.
 
 use crate::error::SceneError;
+use crate::schema::choice::{Hints, Schema};
 use crate::schema::SceneFile;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
+use toml::de::DeTable;
 
 /// A parsed scene: the file's contents and where it came from (relative mesh paths resolve
 /// against its directory).
@@ -41,23 +44,23 @@ impl Scene {
     }
 
     /// Parses `text` (read from `path`) into the tables `T`, with line and column in every
-    /// syntax or schema error.
-    pub(crate) fn parse_as<T: serde::de::DeserializeOwned>(
-        text: &str,
-        path: &Path,
-    ) -> Result<T, SceneError> {
-        toml::from_str(text).map_err(|e| {
-            let (line, column) = e
-                .span()
-                .map(|s| line_column(text, s.start))
-                .unwrap_or((1, 1));
+    /// syntax or schema error; a key refused for belonging to another choice says which.
+    pub(crate) fn parse_as<T: Schema>(text: &str, path: &Path) -> Result<T, SceneError> {
+        let at = |span: Option<Range<usize>>, message: &str| {
+            let (line, column) = span.map(|s| line_column(text, s.start)).unwrap_or((1, 1));
             SceneError::Parse {
                 file: path.to_path_buf(),
                 line,
                 column,
-                message: e.message().trim().to_string(),
+                message: message.trim().to_string(),
             }
-        })
+        };
+        let mut doc = DeTable::parse(text).map_err(|e| at(e.span(), e.message()))?;
+        let mut hints = Hints::default();
+        hints.index(doc.get_ref());
+        T::prepare(doc.get_mut(), &mut hints).map_err(|r| at(Some(r.span), &r.message))?;
+        T::deserialize(toml::de::Deserializer::from(doc))
+            .map_err(|e| at(e.span(), &hints.message(e.span(), e.message())))
     }
 
     /// The directory relative paths in the scene resolve against.

@@ -35,7 +35,11 @@ fn limits() -> Limits {
 }
 
 fn refusal(text: &str) -> SceneError {
-    match Setup::with_limits(&scene(text), None, &limits()) {
+    let scene = match Scene::parse(text, Path::new("s.toml")) {
+        Ok(s) => s,
+        Err(e) => return e,
+    };
+    match Setup::with_limits(&scene, None, &limits()) {
         Ok(_) => panic!("the scene should be refused:\n{text}"),
         Err(e) => e,
     }
@@ -416,7 +420,7 @@ fn the_correction_key_is_checked_and_reported() {
     let with = |extra: &str| TINY.replace("duration = 1e-4", &format!("duration = 1e-4\n{extra}"));
     let e = refusal(&with("correction = \"best\"")).to_string();
     assert!(
-        e.contains("simulation.correction") && e.contains("\"fitted\""),
+        e.contains("simulation.correction") && e.contains("`fitted`"),
         "{e}"
     );
     // Xu's model takes its own fit, or none; ghosts and the scalar calibration are Chen's
@@ -427,7 +431,7 @@ fn the_correction_key_is_checked_and_reported() {
     for c in ["ghosts", "calibrated"] {
         let e = refusal(&xu(c)).to_string();
         assert!(
-            e.contains("simulation.correction") && e.contains("Chen"),
+            e.contains("simulation.correction") && e.contains("expected `fitted` or `none`"),
             "{e}"
         );
     }

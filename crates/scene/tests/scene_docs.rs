@@ -92,13 +92,23 @@ fn tet_tables() -> Vec<Table> {
     let xu = TET.replace("[[material]]\n", "[[material]]\nmodel = \"xu\"\n");
     vec![
         t("[mesh]", &["mesh"], vec![TET.into()]),
-        t("[[material]]", &["material"], vec![TET.into(), xu]),
+        t("[[material]]", &["material"], vec![TET.into(), xu.clone()]),
         t(
             "[material.region]",
             &["material", "region"],
             vec![with(TET, REGION_MATERIAL)],
         ),
-        t("[simulation]", &["simulation"], vec![TET.into()]),
+        t(
+            "[simulation]",
+            &["simulation"],
+            vec![
+                TET.into(),
+                xu.replace(
+                    "[simulation]\n",
+                    "[simulation]\nintegrator = \"implicit\"\n",
+                ),
+            ],
+        ),
         t("[[ground]]", &["ground"], vec![with(TET, "[[ground]]")]),
         t("[[ball]]", &["ball"], vec![with(TET, BALL)]),
         t("[[anchor]]", &["anchor"], vec![with(TET, ANCHOR)]),
@@ -145,7 +155,10 @@ fn shell_tables() -> Vec<Table> {
         s(
             "Thin shells: [simulation]",
             &["simulation"],
-            vec![SHELL.into()],
+            vec![
+                SHELL.into(),
+                SHELL.replace("[simulation]\n", "[simulation]\nintegrator = \"newmark\"\n"),
+            ],
         ),
         s(
             "Thin shells: [output]",

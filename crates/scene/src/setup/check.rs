@@ -3,7 +3,9 @@
 use std::path::Path;
 
 use crate::error::SceneError;
-use crate::schema::{BallSpec, GroundSpec, Region, SceneFile, VelocitySpec};
+use crate::schema::{
+    BallSpec, ExplicitKeys, GroundSpec, Integrator, Region, SceneFile, VelocitySpec,
+};
 
 use super::defaults;
 use perifrac_physics::math::norm;
@@ -122,7 +124,10 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             ));
         }
     }
-    if let Some(s) = sim.safety {
+    if let Integrator::Explicit(ExplicitKeys {
+        safety: Some(s), ..
+    }) = sim.integrator
+    {
         if !(s > 0.0 && s <= 1.0) {
             return Err(ctx.err(
                 "simulation.safety",

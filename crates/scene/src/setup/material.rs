@@ -7,7 +7,7 @@ use perifrac_physics::math::Mat3;
 use perifrac_physics::{ChenMaterial, FractureParams, XuMaterial, YieldParams};
 
 use crate::error::SceneError;
-use crate::schema::{MaterialSpec, SceneFile};
+use crate::schema::{ChenKeys, MaterialSpec, Model, SceneFile};
 
 use super::check::Ctx;
 use super::defaults;
@@ -66,20 +66,27 @@ pub(super) fn materials_by_region(
     rest: &[[f64; 3]],
     horizon: f64,
 ) -> Result<(Materials, Vec<u16>), SceneError> {
-    let model = scene_model(ctx, f)?;
-    let materials = match model {
+    // the parser gives every material the first one's model
+    let mixed = |i: usize| ctx.err(format!("material[{i}].model"), "one model per scene");
+    let materials = match scene_model(f) {
         ModelKind::Chen => Materials::Chen(
             f.material
                 .iter()
                 .enumerate()
-                .map(|(i, m)| chen_material(ctx, i, m, horizon))
+                .map(|(i, m)| match &m.model {
+                    Model::Chen(keys) => chen_material(ctx, i, m, keys, horizon),
+                    Model::Xu(_) => Err(mixed(i)),
+                })
                 .collect::<Result<Vec<_>, _>>()?,
         ),
         ModelKind::Xu => Materials::Xu(
             f.material
                 .iter()
                 .enumerate()
-                .map(|(i, m)| super::xu_material::xu_material(ctx, i, m))
+                .map(|(i, m)| match &m.model {
+                    Model::Xu(keys) => super::xu_material::xu_material(ctx, i, m, keys),
+                    Model::Chen(_) => Err(mixed(i)),
+                })
                 .collect::<Result<Vec<_>, _>>()?,
         ),
     };
@@ -103,32 +110,11 @@ pub(super) fn materials_by_region(
     Ok((materials, ids))
 }
 
-/// The model every material names (Chen's when none does); mixing models is refused.
-pub(super) fn scene_model(ctx: &Ctx, f: &SceneFile) -> Result<ModelKind, SceneError> {
-    let mut chosen: Option<(ModelKind, usize)> = None;
-    for (i, m) in f.material.iter().enumerate() {
-        let this = match m.model.as_deref() {
-            None | Some("chen") => ModelKind::Chen,
-            Some("xu") => ModelKind::Xu,
-            Some(other) => {
-                return Err(ctx.err(
-                    format!("material[{i}].model"),
-                    format!("\"{other}\": expected \"chen\" or \"xu\""),
-                ))
-            }
-        };
-        match chosen {
-            None => chosen = Some((this, i)),
-            Some((first, j)) if first != this => {
-                return Err(ctx.err(
-                    format!("material[{i}].model"),
-                    format!("\"{this}\", but material[{j}] is \"{first}\": one model per scene"),
-                ))
-            }
-            _ => {}
-        }
-    }
-    Ok(chosen.map_or(ModelKind::Chen, |(m, _)| m))
+/// The scene's model: the first material's (Chen's when there is none).
+pub(super) fn scene_model(f: &SceneFile) -> ModelKind {
+    f.material
+        .first()
+        .map_or(ModelKind::Chen, |m| m.model.kind())
 }
 
 /// The stiffest modulus a material may have (Pa): a thousand times diamond's Young's modulus
@@ -231,36 +217,15 @@ pub(super) fn axes(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<Mat3, SceneE
     Ok([0, 1, 2].map(|r| [unit[0][r], unit[1][r], unit[2][r]]))
 }
 
-/// Keys of one model given to a material of the other.
-fn refuse_keys(ctx: &Ctx, i: usize, model: &str, keys: &[(&str, bool)]) -> Result<(), SceneError> {
-    match keys.iter().find(|(_, given)| *given) {
-        Some((k, _)) => Err(ctx.err(
-            format!("material[{i}].{k}"),
-            format!("is not a key of model \"{model}\""),
-        )),
-        None => Ok(()),
-    }
-}
-
-/// The Chen material of `material[i]`; `horizon` converts a yield strain to `Psi0`.
+/// The Chen material of `material[i]` with Chen's `keys`; `horizon` converts a yield strain to `Psi0`.
 fn chen_material(
     ctx: &Ctx,
     i: usize,
     m: &MaterialSpec,
+    keys: &ChenKeys,
     horizon: f64,
 ) -> Result<ChenMaterial, SceneError> {
     let key = format!("material[{i}]");
-    refuse_keys(
-        ctx,
-        i,
-        "chen",
-        &[
-            ("energy", m.energy.is_some()),
-            ("g", m.g.is_some()),
-            ("h", m.h.is_some()),
-            ("moduli", m.moduli.is_some()),
-        ],
-    )?;
     let mut mat = match (m.young, m.poisson) {
         (Some(e), Some(nu)) => {
             elasticity(ctx, i, m)?;
@@ -273,7 +238,7 @@ fn chen_material(
         }
     };
     mat.fracture = fracture(ctx, i, m)?;
-    let psi0 = match (m.yield_psi0, m.yield_strain) {
+    let psi0 = match (keys.yield_psi0, keys.yield_strain) {
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key, "give either yield_psi0 or yield_strain, not both"))
         }
@@ -288,7 +253,7 @@ fn chen_material(
         }
         (None, None) => None,
     };
-    match (psi0, m.plastic_cap) {
+    match (psi0, keys.plastic_cap) {
         (Some((psi0, from_strain)), cap) => {
             let cap = cap.unwrap_or(defaults::PLASTIC_CAP);
             ctx.positive(&format!("{key}.plastic_cap"), cap, "")?;

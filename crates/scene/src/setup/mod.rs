@@ -27,7 +27,7 @@ use crate::budget::{self, Limits, MeshShape, WorkEstimate};
 use crate::driver::Driver;
 use crate::error::SceneError;
 use crate::load::Scene;
-use crate::schema::SceneFile;
+use crate::schema::{Integrator, SceneFile};
 
 use check::Ctx;
 pub(crate) use math::bounds;
@@ -290,15 +290,15 @@ impl Setup {
         };
         let f = &scene.file;
         check::check_settings(&ctx, f)?;
-        let kind = solver::kind(&ctx, &f.simulation)?;
-        if kind == solver::Kind::Implicit && material::scene_model(&ctx, f)? == ModelKind::Chen {
+        solver::check_integrator(&ctx, &f.simulation)?;
+        let implicit = matches!(f.simulation.integrator, Integrator::Implicit(_));
+        if implicit && material::scene_model(f) == ModelKind::Chen {
             return Err(ctx.err(
                 "simulation.integrator",
                 "\"implicit\" needs an energy with a rest stiffness: give the materials \
                  model = \"xu\" (Chen's elastoplastic model steps explicitly)",
             ));
         }
-        let implicit = kind == solver::Kind::Implicit;
         let physics = |cause: PhysicsError| ctx.physics(cause);
         let sim = &f.simulation;
         let frames = frames
@@ -400,9 +400,9 @@ impl Setup {
                 step::travel_limit(c, mean_radius, &velocities, fraction)
             })
         };
-        let travel_fraction = match kind {
-            solver::Kind::Explicit => defaults::TRAVEL_FRACTION,
-            solver::Kind::Implicit => defaults::IMPLICIT_TRAVEL_FRACTION,
+        let travel_fraction = match implicit {
+            false => defaults::TRAVEL_FRACTION,
+            true => defaults::IMPLICIT_TRAVEL_FRACTION,
         };
         let travel_limit = travel(travel_fraction);
         // A fixed step, or "auto"'s bound by the travel limit, already gives a least step
@@ -429,9 +429,13 @@ impl Setup {
             step::stable_limit(model.as_dyn(), &rest, horizon, contact, memo);
         times.stable_step = stage.elapsed();
         times.stable_step_recalled = recalled;
-        let dt_wanted = match kind {
-            solver::Kind::Explicit => step::requested_step(&ctx, sim, dt_limit, travel_limit)?,
-            solver::Kind::Implicit => step::implicit_step(&ctx, sim, frames, travel_limit)?,
+        let dt_wanted = match &sim.integrator {
+            Integrator::Explicit(e) => {
+                step::requested_step(&ctx, sim, e.safety, dt_limit, travel_limit)?
+            }
+            Integrator::Implicit(i) => {
+                step::implicit_step(&ctx, sim, i.steps_per_frame, frames, travel_limit)?
+            }
         };
         let (dt, steps_per_frame) = step::fit_to_frames(sim.duration, frames, dt_wanted);
 
@@ -493,7 +497,7 @@ impl Setup {
             loads,
             dt,
         };
-        let mut solver = solver::build(&ctx, sim, kind, model, start)?;
+        let mut solver = solver::build(&ctx, sim, model, start)?;
         solver.velocities_mut().copy_from_slice(&velocities);
 
         times.total = started.elapsed();

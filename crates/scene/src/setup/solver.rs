@@ -11,91 +11,53 @@ use perifrac_physics::{
 use perifrac_topology::{BoundaryPlanes, TetMesh};
 
 use crate::error::SceneError;
-use crate::schema::SimulationSpec;
+use crate::schema::{
+    ChenCorrection, ExplicitKeys, GhostFitKey, Influence, Integrator, Model, SimulationSpec,
+    XuCorrection,
+};
 
 use super::check::Ctx;
 use super::defaults;
 use super::material::Materials;
 
-/// Which integrator steps the scene.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Kind {
-    /// Velocity Verlet.
-    Explicit,
-    /// Quasi-Newton.
-    Implicit,
-}
-
-/// The integrator `[simulation]` names, with its keys checked against it (no scene mesh
-/// needed, so a typo is refused before any setup work).
-pub(super) fn kind(ctx: &Ctx, sim: &SimulationSpec) -> Result<Kind, SceneError> {
-    let kind = match sim.integrator.as_deref() {
-        None | Some("explicit") => Kind::Explicit,
-        Some("implicit") => Kind::Implicit,
-        Some(other) => {
-            return Err(ctx.err(
-                "simulation.integrator",
-                format!("\"{other}\": expected \"explicit\" or \"implicit\""),
-            ))
-        }
-    };
-    let search = [
-        ("event_levels", sim.event_levels.is_some()),
-        ("force_growth", sim.force_growth.is_some()),
-        ("overshoot", sim.overshoot.is_some()),
-    ];
-    if sim.event_search != Some(true) {
-        if let Some((k, _)) = search.iter().find(|(_, given)| *given) {
-            return Err(ctx.err(
-                format!("simulation.{k}"),
-                "is a setting of the event search: add event_search = true",
-            ));
-        }
-    }
-    if kind == Kind::Explicit {
-        let implicit_only = [
-            ("steps_per_frame", sim.steps_per_frame.is_some()),
-            ("iterations", sim.iterations.is_some()),
-            ("tolerance", sim.tolerance.is_some()),
-            ("history", sim.history.is_some()),
-            ("refactor_share", sim.refactor_share.is_some()),
-        ];
-        if let Some((k, _)) = implicit_only.iter().find(|(_, given)| *given) {
-            return Err(ctx.err(
-                format!("simulation.{k}"),
-                "is a setting of the implicit integrator: add integrator = \"implicit\"",
-            ));
-        }
-    } else {
-        if sim.event_search == Some(true) {
-            return Err(ctx.err(
-                "simulation.event_search",
-                "refines explicit steps; the implicit step takes each frame whole",
-            ));
-        }
-        if sim.safety.is_some() {
-            return Err(ctx.err(
-                "simulation.safety",
-                "scales the explicit stable step; the implicit one has no stability limit \
-                 (set dt or steps_per_frame)",
-            ));
-        }
-        if sim.steps_per_frame == Some(0) {
-            return Err(ctx.err("simulation.steps_per_frame", "must be at least 1"));
-        }
-        if sim.iterations == Some(0) {
-            return Err(ctx.err("simulation.iterations", "must be at least 1"));
-        }
-        if let Some(t) = sim.tolerance {
-            if !(t > 0.0 && t < 1.0) {
-                return Err(ctx.err("simulation.tolerance", format!("{t} must be in (0, 1)")));
+/// Checks the keys of the integrator `[simulation]` names (no scene mesh needed, so a bad
+/// value is refused before any setup work).
+pub(super) fn check_integrator(ctx: &Ctx, sim: &SimulationSpec) -> Result<(), SceneError> {
+    match &sim.integrator {
+        Integrator::Explicit(e) => {
+            let search = [
+                ("event_levels", e.event_levels.is_some()),
+                ("force_growth", e.force_growth.is_some()),
+                ("overshoot", e.overshoot.is_some()),
+            ];
+            if e.event_search != Some(true) {
+                if let Some((k, _)) = search.iter().find(|(_, given)| *given) {
+                    return Err(ctx.err(
+                        format!("simulation.{k}"),
+                        "is a setting of the event search: add event_search = true",
+                    ));
+                }
             }
+            Ok(())
         }
-        if let Some(r) = sim.refactor_share {
-            ctx.non_negative("simulation.refactor_share", r)?;
+        Integrator::Implicit(i) => {
+            if i.steps_per_frame == Some(0) {
+                return Err(ctx.err("simulation.steps_per_frame", "must be at least 1"));
+            }
+            if i.iterations == Some(0) {
+                return Err(ctx.err("simulation.iterations", "must be at least 1"));
+            }
+            if let Some(t) = i.tolerance {
+                if !(t > 0.0 && t < 1.0) {
+                    return Err(ctx.err("simulation.tolerance", format!("{t} must be in (0, 1)")));
+                }
+            }
+            if let Some(r) = i.refactor_share {
+                ctx.non_negative("simulation.refactor_share", r)?;
+            }
+            Ok(())
         }
     }
-    Ok(kind)
 }
 
 /// A force model of either kind, before an integrator owns it.
@@ -185,45 +147,40 @@ pub(super) fn model(
     check: GhostCheck,
 ) -> Result<AnyModel, SceneError> {
     let physics = |cause: PhysicsError| ctx.physics(cause);
+    // the parser names the materials' model in `sim.model`
+    let mixed = || ctx.err("simulation", "the materials' model and its settings differ");
     match materials {
         Materials::Chen(m) => {
-            if sim.influence.is_some() {
-                return Err(ctx.err(
-                    "simulation.influence",
-                    "is a setting of Xu's model: give the materials model = \"xu\"",
-                ));
-            }
+            let keys = match &sim.model {
+                Model::Chen(k) => k,
+                Model::Xu(_) => return Err(mixed()),
+            };
             let base = ChenOptions::default();
-            let ghosts = sim.correction.as_deref() == Some("ghosts");
-            if sim.ghost_fit.is_some() && !ghosts {
+            let ghosts = keys.correction == Some(ChenCorrection::Ghosts);
+            if keys.ghost_fit.is_some() && !ghosts {
                 return Err(ctx.err(
                     "simulation.ghost_fit",
                     "is a setting of the ghost particles: add correction = \"ghosts\"",
                 ));
             }
-            let options = match sim.correction.as_deref() {
-                None | Some("fitted") | Some("ghosts") => base,
-                Some("calibrated") => ChenOptions {
+            let options = match keys.correction {
+                None | Some(ChenCorrection::Fitted) | Some(ChenCorrection::Ghosts) => base,
+                Some(ChenCorrection::Calibrated) => ChenOptions {
                     fitted_dilatation: false,
                     ..base
                 },
-                Some("none") => ChenOptions {
+                Some(ChenCorrection::None) => ChenOptions {
                     calibrated: false,
                     fitted_dilatation: false,
                     ..base
                 },
-                Some(other) => {
-                    return Err(ctx.err(
-                        "simulation.correction",
-                        format!(
-                            "\"{other}\": expected \"fitted\", \"calibrated\", \"none\" or \
-                             \"ghosts\""
-                        ),
-                    ))
-                }
             };
             if ghosts {
-                return ghosted(ctx, sim, disc, mesh, m.as_slice(), options, check);
+                let fit = match keys.ghost_fit {
+                    None | Some(GhostFitKey::Quadratic) => GhostFit::Quadratic,
+                    Some(GhostFitKey::Affine) => GhostFit::Affine,
+                };
+                return ghosted(ctx, sim, disc, mesh, m.as_slice(), options, fit, check);
             }
             let model = ChenModel::with_options(disc, m, options).map_err(physics)?;
             let model = match guard_factor(ctx, sim)? {
@@ -233,37 +190,19 @@ pub(super) fn model(
             Ok(AnyModel::Chen(Box::new(model)))
         }
         Materials::Xu(m) => {
-            if sim.ghost_fit.is_some() {
-                return Err(ctx.err(
-                    "simulation.ghost_fit",
-                    "is a setting of Chen's ghost particles (correction = \"ghosts\")",
-                ));
-            }
-            let fitted_dilatation = match sim.correction.as_deref() {
-                None => XuOptions::default().fitted_dilatation,
-                Some("fitted") => true,
-                Some("none") => false,
-                Some(other) => {
-                    return Err(ctx.err(
-                        "simulation.correction",
-                        format!(
-                            "\"{other}\": Xu's model takes \"fitted\" or \"none\" (its \
-                             weights are normalised; ghosts and the scalar calibration are \
-                             Chen's)"
-                        ),
-                    ))
-                }
+            let keys = match &sim.model {
+                Model::Xu(k) => k,
+                Model::Chen(_) => return Err(mixed()),
             };
-            let kernel = match sim.influence.as_deref() {
-                None | Some("constant") => XuKernelShape::Constant,
-                Some("inverse") => XuKernelShape::Inverse,
-                Some("linear") => XuKernelShape::Linear,
-                Some(other) => {
-                    return Err(ctx.err(
-                        "simulation.influence",
-                        format!("\"{other}\": expected \"constant\", \"inverse\" or \"linear\""),
-                    ))
-                }
+            let fitted_dilatation = match keys.correction {
+                None => XuOptions::default().fitted_dilatation,
+                Some(XuCorrection::Fitted) => true,
+                Some(XuCorrection::None) => false,
+            };
+            let kernel = match keys.influence {
+                None | Some(Influence::Constant) => XuKernelShape::Constant,
+                Some(Influence::Inverse) => XuKernelShape::Inverse,
+                Some(Influence::Linear) => XuKernelShape::Linear,
             };
             let inversion_guard = guard_factor(ctx, sim)?;
             let options = XuOptions {
@@ -279,8 +218,9 @@ pub(super) fn model(
 }
 
 /// Chen's model of `materials` over `disc` with ghosts across the boundary of `mesh`
-/// (`correction = "ghosts"`), with the inversion guard when asked for (its springs on the
-/// ghosts' bonds too).
+/// (`correction = "ghosts"`, each ghost extrapolated by `fit`), with the inversion guard when
+/// asked for (its springs on the ghosts' bonds too).
+#[allow(clippy::too_many_arguments)]
 fn ghosted(
     ctx: &Ctx,
     sim: &SimulationSpec,
@@ -288,18 +228,9 @@ fn ghosted(
     mesh: &TetMesh,
     materials: &[perifrac_physics::ChenMaterial],
     options: ChenOptions,
+    fit: GhostFit,
     check: GhostCheck,
 ) -> Result<AnyModel, SceneError> {
-    let fit = match sim.ghost_fit.as_deref() {
-        None | Some("quadratic") => GhostFit::Quadratic,
-        Some("affine") => GhostFit::Affine,
-        Some(other) => {
-            return Err(ctx.err(
-                "simulation.ghost_fit",
-                format!("\"{other}\": expected \"quadratic\" or \"affine\""),
-            ))
-        }
-    };
     let guard = guard_factor(ctx, sim)?;
     let physics = |cause: PhysicsError| ctx.physics(cause);
     let faces = MeshFaces(BoundaryPlanes::new(mesh, disc.horizon()));
@@ -324,8 +255,8 @@ fn guard_factor(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>, SceneErr
         .transpose()
 }
 
-/// The event search's settings from `[simulation]`, each checked.
-fn search_config(ctx: &Ctx, sim: &SimulationSpec) -> Result<EventSearchConfig, SceneError> {
+/// The event search's settings from the explicit integrator's keys, each checked.
+fn search_config(ctx: &Ctx, sim: &ExplicitKeys) -> Result<EventSearchConfig, SceneError> {
     let base = EventSearchConfig::default();
     let levels = sim.event_levels.unwrap_or(base.levels);
     if levels > MAX_LEVELS {
@@ -363,11 +294,10 @@ pub(super) struct Start<'a> {
     pub dt: f64,
 }
 
-/// The solver: `model` stepped by `kind` from `start`.
+/// The solver: `model` stepped by the scene's integrator from `start`.
 pub(super) fn build(
     ctx: &Ctx,
     sim: &SimulationSpec,
-    kind: Kind,
     model: AnyModel,
     start: Start,
 ) -> Result<Box<dyn Solver>, SceneError> {
@@ -382,8 +312,14 @@ pub(super) fn build(
         dt: TimeStep::Fixed(dt),
         guard_fraction: defaults::GUARD_FRACTION,
     };
-    if sim.event_search == Some(true) {
-        let search = search_config(ctx, sim)?;
+    if let Integrator::Explicit(
+        e @ ExplicitKeys {
+            event_search: Some(true),
+            ..
+        },
+    ) = &sim.integrator
+    {
+        let search = search_config(ctx, e)?;
         return Ok(match model {
             AnyModel::Chen(m) => Box::new(
                 Searched::new(*m, rest, horizon, loads, explicit, search).map_err(physics)?,
@@ -396,28 +332,28 @@ pub(super) fn build(
             ),
         });
     }
-    Ok(match (kind, model) {
-        (Kind::Explicit, AnyModel::Chen(m)) => {
+    Ok(match (&sim.integrator, model) {
+        (Integrator::Explicit(_), AnyModel::Chen(m)) => {
             Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
-        (Kind::Explicit, AnyModel::ChenGhosts(m)) => {
+        (Integrator::Explicit(_), AnyModel::ChenGhosts(m)) => {
             Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
-        (Kind::Explicit, AnyModel::Xu(m)) => {
+        (Integrator::Explicit(_), AnyModel::Xu(m)) => {
             Box::new(Explicit::new(*m, rest, horizon, loads, explicit).map_err(physics)?)
         }
-        (Kind::Implicit, AnyModel::Xu(m)) => {
+        (Integrator::Implicit(keys), AnyModel::Xu(m)) => {
             let base = ImplicitConfig::with_dt(dt);
             let config = ImplicitConfig {
-                max_iterations: sim.iterations.unwrap_or(base.max_iterations),
-                tolerance: sim.tolerance.unwrap_or(base.tolerance),
-                history: sim.history.unwrap_or(base.history),
-                refactor_share: sim.refactor_share.unwrap_or(base.refactor_share),
+                max_iterations: keys.iterations.unwrap_or(base.max_iterations),
+                tolerance: keys.tolerance.unwrap_or(base.tolerance),
+                history: keys.history.unwrap_or(base.history),
+                refactor_share: keys.refactor_share.unwrap_or(base.refactor_share),
                 ..base
             };
             Box::new(Implicit::new(*m, rest, loads, config).map_err(physics)?)
         }
-        (Kind::Implicit, AnyModel::Chen(_) | AnyModel::ChenGhosts(_)) => {
+        (Integrator::Implicit(_), AnyModel::Chen(_) | AnyModel::ChenGhosts(_)) => {
             return Err(ctx.err(
                 "simulation.integrator",
                 "\"implicit\" needs an energy with a rest stiffness: give the materials \

@@ -67,17 +67,18 @@ pub(super) fn fixed_step(ctx: &Ctx, sim: &SimulationSpec) -> Result<Option<f64>,
     }
 }
 
-/// The step the scene asks for (s): `"auto"` is `safety` times the stable limit, and at most
-/// `travel_limit`; a fixed step above [`defaults::MAX_FIXED_FRACTION`] of the stable limit is
-/// refused.
+/// The explicit step the scene asks for (s): `"auto"` is `safety` (default
+/// [`defaults::SAFETY`]) times the stable limit, and at most `travel_limit`; a fixed step above
+/// [`defaults::MAX_FIXED_FRACTION`] of the stable limit is refused.
 pub(super) fn requested_step(
     ctx: &Ctx,
     sim: &SimulationSpec,
+    safety: Option<f64>,
     dt_limit: f64,
     travel_limit: f64,
 ) -> Result<f64, SceneError> {
     let Some(dt) = fixed_step(ctx, sim)? else {
-        return Ok((sim.safety.unwrap_or(defaults::SAFETY) * dt_limit).min(travel_limit));
+        return Ok((safety.unwrap_or(defaults::SAFETY) * dt_limit).min(travel_limit));
     };
     let most = defaults::MAX_FIXED_FRACTION * dt_limit;
     if dt > most {
@@ -99,16 +100,17 @@ pub(super) fn requested_step(
 pub(super) fn implicit_step(
     ctx: &Ctx,
     sim: &SimulationSpec,
+    steps_per_frame: Option<u64>,
     frames: usize,
     travel_limit: f64,
 ) -> Result<f64, SceneError> {
     match fixed_step(ctx, sim)? {
         None => {
             let frame_dt = sim.duration / frames as f64;
-            let per_frame = sim.steps_per_frame.unwrap_or(1).max(1) as f64;
+            let per_frame = steps_per_frame.unwrap_or(1).max(1) as f64;
             Ok((frame_dt / per_frame).min(travel_limit))
         }
-        Some(_) if sim.steps_per_frame.is_some() => Err(ctx.err(
+        Some(_) if steps_per_frame.is_some() => Err(ctx.err(
             "simulation.steps_per_frame",
             "give either dt in seconds or steps_per_frame, not both",
         )),

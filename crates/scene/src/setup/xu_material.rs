@@ -5,48 +5,29 @@ use std::collections::BTreeMap;
 use perifrac_physics::{Basis, Curve, XuAnisotropy, XuMaterial, XuModuli};
 
 use crate::error::SceneError;
-use crate::schema::MaterialSpec;
+use crate::schema::{Energy, MaterialSpec, Moduli, XuKeys};
 
 use super::check::Ctx;
 use super::material::{axes, elasticity, fracture};
 
-/// The Xu material of `material[i]`.
-pub(super) fn xu_material(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<XuMaterial, SceneError> {
+/// The Xu material of `material[i]` with Xu's `keys`.
+pub(super) fn xu_material(
+    ctx: &Ctx,
+    i: usize,
+    m: &MaterialSpec,
+    keys: &XuKeys,
+) -> Result<XuMaterial, SceneError> {
     let key = format!("material[{i}]");
-    for (k, given) in [
-        ("yield_strain", m.yield_strain.is_some()),
-        ("yield_psi0", m.yield_psi0.is_some()),
-        ("plastic_cap", m.plastic_cap.is_some()),
-    ] {
-        if given {
-            return Err(ctx.err(
-                format!("{key}.{k}"),
-                "Xu's hyperelastic model has no plasticity (use model = \"chen\")",
-            ));
-        }
-    }
-    let named = match m.energy.as_deref() {
-        None | Some("neo_hookean") => Curve::NeoHookean,
-        Some("linear") => Curve::Linear,
-        Some("stvk") => Curve::Stvk,
-        Some(other) => {
-            return Err(ctx.err(
-                format!("{key}.energy"),
-                format!("\"{other}\": expected \"linear\", \"neo_hookean\" or \"stvk\""),
-            ))
-        }
+    let named = match keys.energy {
+        None | Some(Energy::NeoHookean) => Curve::NeoHookean,
+        Some(Energy::Linear) => Curve::Linear,
+        Some(Energy::Stvk) => Curve::Stvk,
     };
-    let g = custom(ctx, &format!("{key}.g"), m.g.as_ref())?.unwrap_or_else(|| named.clone());
-    let h = custom(ctx, &format!("{key}.h"), m.h.as_ref())?.unwrap_or(named);
-    let rule = match m.moduli.as_deref() {
-        None | Some("consistent") => XuModuli::Consistent,
-        Some("paper") => XuModuli::Paper,
-        Some(other) => {
-            return Err(ctx.err(
-                format!("{key}.moduli"),
-                format!("\"{other}\": expected \"consistent\" or \"paper\""),
-            ))
-        }
+    let g = custom(ctx, &format!("{key}.g"), keys.g.as_ref())?.unwrap_or_else(|| named.clone());
+    let h = custom(ctx, &format!("{key}.h"), keys.h.as_ref())?.unwrap_or(named);
+    let rule = match keys.moduli {
+        None | Some(Moduli::Consistent) => XuModuli::Consistent,
+        Some(Moduli::Paper) => XuModuli::Paper,
     };
     let (kappa, mu) = elasticity(ctx, i, m)?;
     let young = 9.0 * kappa * mu / (3.0 * kappa + mu);

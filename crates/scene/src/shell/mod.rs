@@ -16,11 +16,10 @@
 //! # Ok::<(), perifrac_scene::SceneError>(())
 //! ```
 
-mod schema;
+pub(crate) mod schema;
 mod setup;
 
 pub use schema::{
     ShellMaterialSpec, ShellOutputSpec, ShellSceneFile, ShellSimulationSpec, ShellSpec,
-    TET_ONLY_KEYS,
 };
 pub use setup::{defaults, is_shell_scene, ShellScene, ShellSetup, ShellSetupInfo};

@@ -1,12 +1,19 @@
 //! The thin-shell scene file: a `[shell]` table (a triangle surface and its thickness) in place
 //! of `[mesh]`, one `[[material]]` with the shell's constants, and the colliders, anchors,
-//! initial velocities and output of tet scenes. Every table rejects unknown keys; keys that
-//! only tet scenes take are named in their own error (see [`TET_ONLY_KEYS`]).
+//! initial velocities and output of tet scenes. Every table rejects unknown keys; the refusal of
+//! a key only solid scenes take says so.
 
 use serde::Deserialize;
 use std::path::PathBuf;
+use toml::de::DeTable;
 
-use crate::schema::{AnchorSpec, BallSpec, DtSpec, GroundSpec, VelocitySpec};
+use crate::schema::choice::{
+    all_keys, keys_of, split, table_mut, tables_mut, variants_of, Choice, Hints, Named, Refusal,
+    Schema,
+};
+use crate::schema::{
+    AnchorSpec, BallSpec, DtSpec, GroundSpec, OutputSpec, SceneFile, ShellIntegrator, VelocitySpec,
+};
 
 /// A whole thin-shell scene file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -134,20 +141,13 @@ pub struct ShellSimulationSpec {
     pub event_levels: Option<u32>,
     /// Event search: the largest force may grow by this factor in a sub-step (default 1.1).
     pub force_growth: Option<f64>,
-    /// `"explicit"` (default: velocity Verlet under the stable limit) or `"newmark"` (the
-    /// paper's implicit average-acceleration rule: any step, `dt` in seconds required).
-    pub integrator: Option<String>,
-    /// Newmark: L-BFGS iterations per step at most (default 200; under the search, a trial
-    /// that needs more than 30 is undone and halved).
-    pub iterations: Option<usize>,
-    /// Newmark: the residual force a step stops at, as a share of its force scale (default
-    /// 1e-6).
-    pub tolerance: Option<f64>,
     /// The shell's pieces repel each other within half the thickness of the mid-surface,
     /// except across fresh cracks (default false).
     pub self_contact: Option<bool>,
     /// Self contact: penalty stiffness per pair as a multiple of `Y h` (default 0.01).
     pub self_contact_stiffness: Option<f64>,
+    /// The integrator, `"explicit"` (default) or `"newmark"`, with the keys only it takes.
+    pub integrator: ShellIntegrator,
 }
 
 /// Frame output of a shell scene.
@@ -174,83 +174,45 @@ pub struct ShellOutputSpec {
     pub checkpoint_every: Option<usize>,
 }
 
-/// Keys that tet scenes take and shell scenes do not, as `table.key` (`table` alone for a
-/// whole table), each with what to do instead.
-pub const TET_ONLY_KEYS: &[(&str, &str)] = &[
-    (
-        "mesh",
-        "a scene is a tet solid ([mesh]) or a thin shell ([shell]), not both",
-    ),
-    (
-        "precrack",
-        "shells start whole; cracks open where the strain passes the threshold",
-    ),
-    (
-        "simulation.horizon_factor",
-        "shells have no horizon: forces come from each triangle and its neighbours",
-    ),
-    (
-        "simulation.contact_radius",
-        "a shell vertex touches colliders as a sphere of half the thickness",
-    ),
-    (
-        "simulation.steps_per_frame",
-        "shells set their step with dt (the frames take whole steps)",
-    ),
-    (
-        "simulation.history",
-        "a key of the tet scenes' implicit step",
-    ),
-    ("simulation.refactor_share", "an implicit-integrator key"),
-    ("simulation.influence", "a key of Xu's peridynamic model"),
-    (
-        "simulation.correction",
-        "a key of Chen's peridynamic model (shells have no horizon)",
-    ),
-    (
-        "simulation.inversion_guard",
-        "a key of the tet scenes' peridynamic models",
-    ),
-    (
-        "simulation.overshoot",
-        "shells break at the finest level of the search; set `event_levels`",
-    ),
-    (
-        "simulation.self_contact_distance",
-        "a key of tet scenes' self contact",
-    ),
-    (
-        "simulation.self_contact_damping",
-        "a key of tet scenes' self contact",
-    ),
-    (
-        "simulation.self_contact_friction",
-        "a key of tet scenes' self contact",
-    ),
-    (
-        "material.model",
-        "a shell's material is Gingold's; give young, poisson, density",
-    ),
-    ("material.energy", "a key of Xu's peridynamic model"),
-    ("material.g", "a key of Xu's peridynamic model"),
-    ("material.h", "a key of Xu's peridynamic model"),
-    ("material.moduli", "a key of Xu's peridynamic model"),
-    ("material.region", "a shell has one material"),
-    ("material.bulk_modulus", "give a shell's young and poisson"),
-    ("material.shear_modulus", "give a shell's young and poisson"),
-    (
-        "material.s_crit",
-        "a shell breaks at `fracture_strain` (a principal strain)",
-    ),
-    ("material.alpha", "a key of Chen's bond damage"),
-    ("material.yield_psi0", "a shell yields at `yield_strain`"),
-    ("material.plastic_cap", "a key of Chen's bond plasticity"),
-    ("material.anisotropy", "shells are isotropic"),
-    ("material.axes", "shells are isotropic"),
-    ("output.particles", "a shell has no particles"),
-    (
-        "output.smooth_cracks",
-        "shell cracks are straight segments across triangles already",
-    ),
-    ("output.debris_tets", "a shell frame writes every piece"),
-];
+/// What a thin-shell scene says of a key only solid scenes take.
+const SOLID_ONLY: &str = "solid scenes ([mesh]), not of thin shells ([shell])";
+
+/// Every key a shell scene's `[simulation]` takes, whatever its integrator.
+pub(crate) fn simulation_keys() -> Vec<&'static str> {
+    all_keys(
+        keys_of::<ShellSimulationSpec>(),
+        &[&variants_of::<ShellIntegrator>()],
+    )
+}
+
+impl Schema for ShellSceneFile {
+    fn prepare(doc: &mut DeTable<'_>, hints: &mut Hints) -> Result<(), Refusal> {
+        let solid = keys_of::<SceneFile>();
+        hints.foreign(doc, keys_of::<ShellSceneFile>(), solid, SOLID_ONLY);
+        let material = crate::schema::material_keys();
+        for (t, _) in tables_mut(doc, "material") {
+            hints.foreign(t, keys_of::<ShellMaterialSpec>(), &material, SOLID_ONLY);
+        }
+        if let Some((t, span)) = table_mut(doc, "simulation") {
+            let solid = crate::schema::simulation_keys();
+            hints.foreign(t, &simulation_keys(), &solid, SOLID_ONLY);
+            let choice = Choice {
+                field: "integrator",
+                named: Named::InTable {
+                    default: "explicit",
+                },
+                variants: variants_of::<ShellIntegrator>(),
+            };
+            split(t, span, keys_of::<ShellSimulationSpec>(), &[choice], hints)?;
+        }
+        if let Some((t, _)) = table_mut(doc, "output") {
+            hints.foreign(
+                t,
+                keys_of::<ShellOutputSpec>(),
+                keys_of::<OutputSpec>(),
+                SOLID_ONLY,
+            );
+        }
+        Ok(())
+    }
+}

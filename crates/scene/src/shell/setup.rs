@@ -11,7 +11,7 @@ use perifrac_shell::{
 };
 
 use crate::error::SceneError;
-use crate::schema::DtSpec;
+use crate::schema::{DtSpec, ShellIntegrator};
 use crate::setup::check::{check_colliders, check_velocities, show, Ctx};
 use crate::setup::colliders::build_colliders;
 use crate::setup::loads::{initial_velocities, select};
@@ -19,7 +19,7 @@ use crate::setup::math::{bounds, up_from_gravity};
 use crate::setup::step::fit_to_frames;
 use crate::setup::CheckpointPolicy;
 
-use super::schema::{ShellSceneFile, ShellSpec, TET_ONLY_KEYS};
+use super::schema::{ShellSceneFile, ShellSpec};
 
 /// Defaults of shell scenes.
 pub mod defaults {
@@ -66,18 +66,8 @@ impl ShellScene {
         ShellScene::parse(&crate::load::read(path)?, path)
     }
 
-    /// Parses `text` as if read from `path`: a key only tet scenes take is refused by name
-    /// (with what to do instead) before the schema's own checks.
+    /// Parses `text` as if read from `path`.
     pub fn parse(text: &str, path: &Path) -> Result<ShellScene, SceneError> {
-        if let Ok(table) = text.parse::<toml::Table>() {
-            if let Some((key, why)) = tet_only_key(&table) {
-                return Err(SceneError::invalid(
-                    path,
-                    key,
-                    format!("a key of tet scenes, not of thin-shell ([shell]) scenes: {why}"),
-                ));
-            }
-        }
         let scene = crate::load::Scene::parse_as::<ShellSceneFile>(text, path)?;
         Ok(ShellScene {
             path: path.to_path_buf(),
@@ -85,31 +75,6 @@ impl ShellScene {
             file: scene,
         })
     }
-}
-
-/// The first key of `table` that only tet scenes take, as the scene names it
-/// (`material[1].s_crit`), with the reason from [`TET_ONLY_KEYS`].
-fn tet_only_key(table: &toml::Table) -> Option<(String, &'static str)> {
-    for (key, why) in TET_ONLY_KEYS {
-        match key.split_once('.') {
-            None if table.contains_key(*key) => return Some(((*key).to_string(), why)),
-            None => {}
-            Some((t, k)) => match table.get(t) {
-                Some(toml::Value::Table(sub)) if sub.contains_key(k) => {
-                    return Some(((*key).to_string(), why))
-                }
-                Some(toml::Value::Array(items)) => {
-                    for (i, item) in items.iter().enumerate() {
-                        if item.as_table().is_some_and(|s| s.contains_key(k)) {
-                            return Some((format!("{t}[{i}].{k}"), why));
-                        }
-                    }
-                }
-                _ => {}
-            },
-        }
-    }
-    None
 }
 
 /// What the setup found and chose, for the command line and `run.json`.
@@ -250,26 +215,13 @@ impl ShellSetup {
             };
             ctx.err(key, e.to_string())
         })?;
-        let newmark = match sim.integrator.as_deref() {
-            None | Some("explicit") => {
-                for (key, set) in [
-                    ("simulation.iterations", sim.iterations.is_some()),
-                    ("simulation.tolerance", sim.tolerance.is_some()),
-                ] {
-                    if set {
-                        return Err(ctx.err(
-                            key,
-                            "sets the implicit step: give integrator = \"newmark\" too",
-                        ));
-                    }
-                }
-                None
-            }
-            Some("newmark") => {
+        let newmark = match &sim.integrator {
+            ShellIntegrator::Explicit(_) => None,
+            ShellIntegrator::Newmark(keys) => {
                 let defaults = NewmarkConfig::default();
                 let c = NewmarkConfig {
-                    max_iterations: sim.iterations.unwrap_or(defaults.max_iterations),
-                    tolerance: sim.tolerance.unwrap_or(defaults.tolerance),
+                    max_iterations: keys.iterations.unwrap_or(defaults.max_iterations),
+                    tolerance: keys.tolerance.unwrap_or(defaults.tolerance),
                     ..defaults
                 };
                 c.check().map_err(|e| {
@@ -288,12 +240,6 @@ impl ShellSetup {
                     ));
                 }
                 Some(c)
-            }
-            Some(other) => {
-                return Err(ctx.err(
-                    "simulation.integrator",
-                    format!("\"{other}\": expected \"explicit\" or \"newmark\""),
-                ))
             }
         };
         let frames = frames

@@ -4,8 +4,17 @@
 //! Units are SI: metres, seconds, kilograms, pascals.
 
 use serde::Deserialize;
-use std::collections::BTreeMap;
 use std::path::PathBuf;
+
+pub(crate) mod choice;
+mod variants;
+
+pub use variants::*;
+
+use choice::{
+    all_keys, keys_of, split, table_mut, tables_mut, variants_of, Choice, Hints, Named, Refusal,
+};
+use toml::de::DeTable;
 
 /// A whole scene file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -95,18 +104,6 @@ impl Region {
 pub struct MaterialSpec {
     /// A name for messages.
     pub name: Option<String>,
-    /// `"chen"` (default) or `"xu"`.
-    pub model: Option<String>,
-    /// Xu: the named energy for both curves, `"linear"`, `"neo_hookean"` (default) or
-    /// `"stvk"`.
-    pub energy: Option<String>,
-    /// Xu: a custom dilatation curve `g`, basis names to coefficients (`{ A1 = 1.0 }`).
-    pub g: Option<BTreeMap<String, f64>>,
-    /// Xu: a custom bond curve `h`, basis names to coefficients (`{ B3 = 1.5, B1 = -0.5 }`).
-    pub h: Option<BTreeMap<String, f64>>,
-    /// Xu: how `young` and `poisson` become the model's `lambda` and `mu`: `"consistent"`
-    /// (default) or `"paper"`.
-    pub moduli: Option<String>,
     /// Particles whose rest barycentre lies in this box get this material.
     pub region: Option<Region>,
     /// Young's modulus (Pa), with `poisson`; or give `bulk_modulus` and `shear_modulus`.
@@ -123,17 +120,13 @@ pub struct MaterialSpec {
     pub s_crit: Option<f64>,
     /// Damage scaling of the threshold (default 0).
     pub alpha: Option<f64>,
-    /// Yield limit `Psi0` in the raw units of `A^2` (depends on the horizon); or `yield_strain`.
-    pub yield_psi0: Option<f64>,
-    /// Yield as a deviatoric bond strain (dimensionless), converted to `Psi0` for the horizon.
-    pub yield_strain: Option<f64>,
-    /// Plastic extension cap as a ratio of the rest bond length (default 0.2 when plastic).
-    pub plastic_cap: Option<f64>,
     /// Anisotropy (default isotropic). Chen: the diagonal of `G` in `omega = delta / |G xi|`
     /// along `axes`; Xu: `Sigma = diag(s1, s2, s3)`, `s1 s2 s3 = 1`, along `axes`.
     pub anisotropy: Option<[f64; 3]>,
     /// The material axes of `anisotropy`, three orthonormal vectors (default x, y, z).
     pub axes: Option<[[f64; 3]; 3]>,
+    /// The force model, `"chen"` (default) or `"xu"`, with the keys only it takes.
+    pub model: MaterialModel,
 }
 
 /// `dt = "auto"` or a number of seconds.
@@ -154,8 +147,6 @@ pub struct SimulationSpec {
     pub horizon_factor: Option<f64>,
     /// Time step: `"auto"` (default) or seconds; a fixed step above the stable limit is refused.
     pub dt: Option<DtSpec>,
-    /// Fraction of the stable limit used by `"auto"` (default 0.8).
-    pub safety: Option<f64>,
     /// Simulated duration (s).
     pub duration: f64,
     /// Gravity (m/s^2), default none.
@@ -165,44 +156,9 @@ pub struct SimulationSpec {
     /// Contact radius of a particle as a multiple of its volume-equivalent radius, capped on the
     /// boundary at the distance to the surface (default 1; see `setup::radii`).
     pub contact_radius: Option<f64>,
-    /// `"explicit"` (velocity Verlet, default) or `"implicit"` (quasi-Newton; Xu's model).
-    pub integrator: Option<String>,
-    /// Implicit: steps per frame when `dt = "auto"` (default 1).
-    pub steps_per_frame: Option<u64>,
-    /// Implicit: iterations per step at most (default 100).
-    pub iterations: Option<usize>,
-    /// Implicit: relative decrease at which a step stops (default 1e-4).
-    pub tolerance: Option<f64>,
-    /// Implicit: L-BFGS pairs kept (default 10; 0: the constant matrix alone).
-    pub history: Option<usize>,
-    /// Implicit: refactor the step matrix when this share of the bonds broke since the last
-    /// factorisation (default 0.02).
-    pub refactor_share: Option<f64>,
-    /// Chen: how the constants meet the discrete family: `"fitted"` (default: the dilatation
-    /// fitted per bond, `b` calibrated), `"calibrated"` (scalars per particle), `"none"`
-    /// (docs/model.md's constants) or `"ghosts"` (the fitted correction over families completed by
-    /// ghost particles mirrored across the mesh's boundary; with fracture a ghost is dropped
-    /// once its source's family loses a bond). Xu: `"fitted"` (default: the dilatation's
-    /// weights fitted per particle, back on the normalised ones once it loses a bond) or
-    /// `"none"` (the normalised weights).
-    pub correction: Option<String>,
-    /// Chen with `correction = "ghosts"`: how a ghost extrapolates its source's displacement,
-    /// `"quadratic"` (default) or `"affine"`.
-    pub ghost_fit: Option<String>,
-    /// Xu: the influence function, `"constant"` (default), `"inverse"` or `"linear"`.
-    pub influence: Option<String>,
     /// The inversion guard's factor on the rest bond stiffness (default none): springs towards
     /// each particle's affine deformation that keep a crushed body from folding through itself.
     pub inversion_guard: Option<f64>,
-    /// Explicit: cover each step by sub-steps of `dt 2^-k`, refined where forces jump or bonds
-    /// break late (default false).
-    pub event_search: Option<bool>,
-    /// Event search: the finest level `k_max` (default 4).
-    pub event_levels: Option<u32>,
-    /// Event search: the largest force may grow by this factor in a sub-step (default 1.1).
-    pub force_growth: Option<f64>,
-    /// Event search: a bond may break this share past its threshold (default 0.1).
-    pub overshoot: Option<f64>,
     /// Contact between particles that share no intact bond: fragments and the faces of cracks
     /// push each other apart (default: on when a material can break).
     pub self_contact: Option<bool>,
@@ -215,6 +171,10 @@ pub struct SimulationSpec {
     pub self_contact_damping: Option<f64>,
     /// Self contact: Coulomb friction coefficient (default 0.5).
     pub self_contact_friction: Option<f64>,
+    /// The integrator, `"explicit"` (default) or `"implicit"`, with the keys only it takes.
+    pub integrator: Integrator,
+    /// The keys of the materials' model (named in `[[material]]`, not here).
+    pub model: SimulationModel,
 }
 
 /// A ground plane (half-space) through `point` with outward `normal`.
@@ -332,4 +292,104 @@ pub struct OutputSpec {
     /// (`frames/debris_NNNN.ply`) instead of surfaces (default
     /// [`crate::setup::DEFAULT_DEBRIS_TETS`]; 0 writes every piece as a surface).
     pub debris_tets: Option<usize>,
+}
+
+/// What a solid scene says of a key only thin-shell scenes take.
+pub(crate) const SHELL_ONLY: &str = "thin-shell scenes ([shell]), not of solids ([mesh])";
+
+impl choice::Schema for SceneFile {
+    fn prepare(doc: &mut DeTable<'_>, hints: &mut Hints) -> Result<(), Refusal> {
+        use crate::shell::schema as shell;
+        hints.foreign(
+            doc,
+            keys_of::<SceneFile>(),
+            keys_of::<shell::ShellSceneFile>(),
+            SHELL_ONLY,
+        );
+        let models = variants_of::<MaterialModel>();
+        let material = material_keys();
+        let mut model: Option<(String, usize)> = None;
+        for (i, (t, span)) in tables_mut(doc, "material").into_iter().enumerate() {
+            hints.foreign(
+                t,
+                &material,
+                keys_of::<shell::ShellMaterialSpec>(),
+                SHELL_ONLY,
+            );
+            let choice = Choice {
+                field: "model",
+                named: Named::InTable { default: "chen" },
+                variants: models.clone(),
+            };
+            let chosen = split(t, span, keys_of::<MaterialSpec>(), &[choice], hints)?;
+            let Some(this) = chosen.into_iter().next() else {
+                continue;
+            };
+            match &model {
+                None => model = Some((this.get_ref().clone(), i)),
+                Some((first, j)) if first != this.get_ref() => {
+                    return Err(Refusal {
+                        span: this.span(),
+                        message: format!(
+                            "model \"{}\", but material[{j}] has model \"{first}\": one \
+                             model per scene",
+                            this.get_ref()
+                        ),
+                    })
+                }
+                _ => {}
+            }
+        }
+        if let Some((t, span)) = table_mut(doc, "simulation") {
+            let integrators = variants_of::<Integrator>();
+            let settings = variants_of::<SimulationModel>();
+            hints.foreign(t, &simulation_keys(), &shell::simulation_keys(), SHELL_ONLY);
+            let choices = [
+                Choice {
+                    field: "integrator",
+                    named: Named::InTable {
+                        default: "explicit",
+                    },
+                    variants: integrators,
+                },
+                Choice {
+                    field: "model",
+                    named: Named::Elsewhere {
+                        variant: model.map_or_else(|| "chen".to_string(), |(m, _)| m),
+                        place: "[[material]]",
+                    },
+                    variants: settings,
+                },
+            ];
+            split(t, span, keys_of::<SimulationSpec>(), &choices, hints)?;
+        }
+        if let Some((t, _)) = table_mut(doc, "output") {
+            hints.foreign(
+                t,
+                keys_of::<OutputSpec>(),
+                keys_of::<shell::ShellOutputSpec>(),
+                SHELL_ONLY,
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Every key a solid scene's `[simulation]` takes, whatever its choices.
+pub(crate) fn simulation_keys() -> Vec<&'static str> {
+    all_keys(
+        keys_of::<SimulationSpec>(),
+        &[
+            &variants_of::<Integrator>(),
+            &variants_of::<SimulationModel>(),
+        ],
+    )
+}
+
+/// Every key a solid scene's `[[material]]` takes, whatever its model.
+pub(crate) fn material_keys() -> Vec<&'static str> {
+    all_keys(
+        keys_of::<MaterialSpec>(),
+        &[&variants_of::<MaterialModel>()],
+    )
 }
