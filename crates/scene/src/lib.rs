@@ -1,6 +1,6 @@
 //! Scene files and the simulation driver of perifrac.
 //!
-//! A scene (TOML, [`schema`]) names the object (a built-in primitive or a mesh file), materials
+//! A scene (TOML, [`schema`], crate `perifrac-schema`) names the object (a built-in primitive or a mesh file), materials
 //! by region, the horizon, the time step (`"auto"` allowed), the duration, colliders (ground
 //! planes and balls), anchors, initial velocities, initial cracks and the frame output. A
 //! thin-shell scene ([`shell`]) names a triangle surface instead.
@@ -38,11 +38,13 @@ pub mod manifest;
 pub mod memo;
 pub mod output;
 pub mod run;
-pub mod schema;
 pub mod setup;
 pub mod shell;
 pub mod sinks;
 pub mod usd;
+
+/// The scene file's tables (the `perifrac-schema` crate).
+pub use perifrac_schema as schema;
 
 pub use body::{AnyScene, AnySetup, BodySummary, ShellSummary, SolidSummary, StepError};
 pub use budget::{Limits, WorkEstimate};

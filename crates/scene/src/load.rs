@@ -1,11 +1,8 @@
 //! Reading a scene file: TOML parsing with line and column in every syntax or schema error.
 
 use crate::error::SceneError;
-use crate::schema::choice::{Hints, Schema};
-use crate::schema::SceneFile;
-use std::ops::Range;
+use crate::schema::{SceneFile, Schema};
 use std::path::{Path, PathBuf};
-use toml::de::DeTable;
 
 /// A parsed scene: the file's contents and where it came from (relative mesh paths resolve
 /// against its directory).
@@ -27,7 +24,7 @@ impl Scene {
 
     /// Parses `text` as if read from `path`.
     pub fn parse(text: &str, path: &Path) -> Result<Scene, SceneError> {
-        if crate::shell::is_shell_scene(text) {
+        if perifrac_schema::is_shell_scene(text) {
             return Err(SceneError::invalid(
                 path,
                 "shell",
@@ -46,21 +43,12 @@ impl Scene {
     /// Parses `text` (read from `path`) into the tables `T`, with line and column in every
     /// syntax or schema error; a key refused for belonging to another choice says which.
     pub(crate) fn parse_as<T: Schema>(text: &str, path: &Path) -> Result<T, SceneError> {
-        let at = |span: Option<Range<usize>>, message: &str| {
-            let (line, column) = span.map(|s| line_column(text, s.start)).unwrap_or((1, 1));
-            SceneError::Parse {
-                file: path.to_path_buf(),
-                line,
-                column,
-                message: message.trim().to_string(),
-            }
-        };
-        let mut doc = DeTable::parse(text).map_err(|e| at(e.span(), e.message()))?;
-        let mut hints = Hints::default();
-        hints.index(doc.get_ref());
-        T::prepare(doc.get_mut(), &mut hints).map_err(|r| at(Some(r.span), &r.message))?;
-        T::deserialize(toml::de::Deserializer::from(doc))
-            .map_err(|e| at(e.span(), &hints.message(e.span(), e.message())))
+        perifrac_schema::parse(text).map_err(|e| SceneError::Parse {
+            file: path.to_path_buf(),
+            line: e.line,
+            column: e.column,
+            message: e.message,
+        })
     }
 
     /// The directory relative paths in the scene resolve against.
@@ -78,18 +66,6 @@ pub(crate) fn read(path: &Path) -> Result<String, SceneError> {
         file: path.to_path_buf(),
         cause,
     })
-}
-
-/// 1-based line and column (in characters) of byte `offset` in `text`.
-fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let mut offset = offset.min(text.len());
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
-    }
-    let before = &text[..offset];
-    let line = before.matches('\n').count() + 1;
-    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
-    (line, column)
 }
 
 #[cfg(test)]
@@ -125,12 +101,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(msg.starts_with("s.toml:9:11: "), "{msg}");
-    }
-
-    #[test]
-    fn line_column_counts_characters() {
-        assert_eq!(line_column("ab\ncdé\nf", 0), (1, 1));
-        assert_eq!(line_column("ab\ncdé\nf", 3), (2, 1));
-        assert_eq!(line_column("ab\ncdé\nf", 8), (3, 1));
     }
 }

@@ -80,30 +80,7 @@ pub mod defaults {
     pub const CORRECTION_WARNING_MAX: f64 = 100.0;
 }
 
-/// The peridynamic force models a solid scene can use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ModelKind {
-    /// Chen et al. 2018: elastoplastic, state-based (docs/model.md section 2).
-    Chen,
-    /// Xu et al. 2018: hyperelastic (docs/model.md section 5).
-    Xu,
-}
-
-impl ModelKind {
-    /// Its name in scene files and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelKind::Chen => "chen",
-            ModelKind::Xu => "xu",
-        }
-    }
-}
-
-impl std::fmt::Display for ModelKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+pub use perifrac_schema::ModelKind;
 
 /// What the run writes besides the surface PLY.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -16,10 +16,10 @@
 //! # Ok::<(), perifrac_scene::SceneError>(())
 //! ```
 
-pub(crate) mod schema;
 mod setup;
 
-pub use schema::{
+pub use perifrac_schema::is_shell_scene;
+pub use perifrac_schema::shell::{
     ShellMaterialSpec, ShellOutputSpec, ShellSceneFile, ShellSimulationSpec, ShellSpec,
 };
-pub use setup::{defaults, is_shell_scene, ShellScene, ShellSetup, ShellSetupInfo};
+pub use setup::{defaults, ShellScene, ShellSetup, ShellSetupInfo};

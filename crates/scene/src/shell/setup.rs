@@ -19,7 +19,7 @@ use crate::setup::math::{bounds, up_from_gravity};
 use crate::setup::step::fit_to_frames;
 use crate::setup::CheckpointPolicy;
 
-use super::schema::{ShellSceneFile, ShellSpec};
+use perifrac_schema::shell::{ShellSceneFile, ShellSpec};
 
 /// Defaults of shell scenes.
 pub mod defaults {
@@ -51,13 +51,6 @@ pub struct ShellScene {
     pub text: String,
     /// The parsed tables.
     pub file: ShellSceneFile,
-}
-
-/// Whether `text` is a thin-shell scene (has a top-level `shell` table). Text that is not TOML
-/// is not one (the tet scene parser reports its syntax error).
-pub fn is_shell_scene(text: &str) -> bool {
-    text.parse::<toml::Table>()
-        .is_ok_and(|t| t.contains_key("shell"))
 }
 
 impl ShellScene {

@@ -1,20 +1,120 @@
-//! The scene file (TOML): what a user writes. Every table rejects unknown keys, so a typo is an
-//! error with its line and column rather than a silently ignored setting.
+//! The scene file (TOML) of perifrac: what a user writes, as typed Rust.
+//!
+//! A solid scene is a [`SceneFile`]; a thin-shell scene, which has a `[shell]` table in place
+//! of `[mesh]`, is a [`shell::ShellSceneFile`]. [`parse`] reads either. Every table rejects
+//! unknown keys, so a typo is an error with its line, column and key rather than a silently
+//! ignored setting. A choice (a material's `model`, the `integrator`) is an enum whose variants
+//! own their keys, so a key of another variant is refused too, with the variant that takes it.
 //!
 //! Units are SI: metres, seconds, kilograms, pascals.
+//!
+//! ```
+//! let text = "[mesh]\nprimitive = \"box\"\n[[material]]\nyoung = 1e9\npoisson = 0.25\n\
+//!             density = 1000.0\n[simulation]\nduration = 1e-3\niterations = 5\n";
+//! let e = perifrac_schema::parse::<perifrac_schema::SceneFile>(text).unwrap_err();
+//! assert_eq!((e.line, e.column), (9, 1));
+//! assert!(e.message.starts_with("simulation.iterations: a key of integrator = \"implicit\""));
+//! ```
+
+#![warn(missing_docs)]
 
 use serde::Deserialize;
+use std::ops::Range;
 use std::path::PathBuf;
 
-pub(crate) mod choice;
+mod choice;
+pub mod shell;
 mod variants;
 
+pub use choice::Schema;
 pub use variants::*;
 
 use choice::{
     all_keys, keys_of, split, table_mut, tables_mut, variants_of, Choice, Hints, Named, Refusal,
 };
 use toml::de::DeTable;
+
+/// Why a scene's text does not parse, and where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParseError {
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column, in characters.
+    pub column: usize,
+    /// What is wrong, led by the key's path (`material[1].young: ...`) where there is one.
+    pub message: String,
+}
+
+impl std::fmt::Display for ParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}: {}", self.line, self.column, self.message)
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+/// Parses `text` into the tables `T` ([`SceneFile`] or [`shell::ShellSceneFile`]), with line,
+/// column and key in every syntax or schema error; a key refused for belonging to another
+/// choice says which takes it.
+pub fn parse<T: Schema>(text: &str) -> Result<T, ParseError> {
+    let at = |span: Option<Range<usize>>, message: &str| {
+        let (line, column) = span.map(|s| line_column(text, s.start)).unwrap_or((1, 1));
+        ParseError {
+            line,
+            column,
+            message: message.trim().to_string(),
+        }
+    };
+    let mut doc = DeTable::parse(text).map_err(|e| at(e.span(), e.message()))?;
+    let mut hints = Hints::default();
+    hints.index(doc.get_ref());
+    T::prepare(doc.get_mut(), &mut hints).map_err(|r| at(Some(r.span), &r.message))?;
+    T::deserialize(toml::de::Deserializer::from(doc))
+        .map_err(|e| at(e.span(), &hints.message(e.span(), e.message())))
+}
+
+/// Whether `text` is a thin-shell scene (has a top-level `shell` table). Text that is not TOML
+/// is not one (the solid scene parser reports its syntax error).
+pub fn is_shell_scene(text: &str) -> bool {
+    DeTable::parse(text).is_ok_and(|t| t.get_ref().contains_key("shell"))
+}
+
+/// 1-based line and column (in characters) of byte `offset` in `text`.
+fn line_column(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// The peridynamic force models a solid scene can use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// Chen et al. 2018: elastoplastic, state-based (docs/model.md section 2).
+    Chen,
+    /// Xu et al. 2018: hyperelastic (docs/model.md section 5).
+    Xu,
+}
+
+impl ModelKind {
+    /// Its name in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Chen => "chen",
+            ModelKind::Xu => "xu",
+        }
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// A whole scene file.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -290,7 +390,7 @@ pub struct OutputSpec {
     pub smooth_cracks: Option<bool>,
     /// Pieces of at most this many tets are written as debris points
     /// (`frames/debris_NNNN.ply`) instead of surfaces (default
-    /// [`crate::setup::DEFAULT_DEBRIS_TETS`]; 0 writes every piece as a surface).
+    /// 3; 0 writes every piece as a surface).
     pub debris_tets: Option<usize>,
 }
 
@@ -299,7 +399,6 @@ pub(crate) const SHELL_ONLY: &str = "thin-shell scenes ([shell]), not of solids 
 
 impl choice::Schema for SceneFile {
     fn prepare(doc: &mut DeTable<'_>, hints: &mut Hints) -> Result<(), Refusal> {
-        use crate::shell::schema as shell;
         hints.foreign(
             doc,
             keys_of::<SceneFile>(),
@@ -392,4 +491,23 @@ pub(crate) fn material_keys() -> Vec<&'static str> {
         keys_of::<MaterialSpec>(),
         &[&variants_of::<MaterialModel>()],
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_column_counts_characters() {
+        assert_eq!(line_column("ab\ncdé\nf", 0), (1, 1));
+        assert_eq!(line_column("ab\ncdé\nf", 3), (2, 1));
+        assert_eq!(line_column("ab\ncdé\nf", 8), (3, 1));
+    }
+
+    #[test]
+    fn a_shell_scene_is_told_by_its_table() {
+        assert!(is_shell_scene("[shell]\nthickness = 1e-3\n"));
+        assert!(!is_shell_scene("[mesh]\nprimitive = \"box\"\n"));
+        assert!(!is_shell_scene("[shell"));
+    }
 }

@@ -7,11 +7,11 @@ use serde::Deserialize;
 use std::path::PathBuf;
 use toml::de::DeTable;
 
-use crate::schema::choice::{
+use crate::choice::{
     all_keys, keys_of, split, table_mut, tables_mut, variants_of, Choice, Hints, Named, Refusal,
     Schema,
 };
-use crate::schema::{
+use crate::{
     AnchorSpec, BallSpec, DtSpec, GroundSpec, OutputSpec, SceneFile, ShellIntegrator, VelocitySpec,
 };
 
@@ -189,12 +189,12 @@ impl Schema for ShellSceneFile {
     fn prepare(doc: &mut DeTable<'_>, hints: &mut Hints) -> Result<(), Refusal> {
         let solid = keys_of::<SceneFile>();
         hints.foreign(doc, keys_of::<ShellSceneFile>(), solid, SOLID_ONLY);
-        let material = crate::schema::material_keys();
+        let material = crate::material_keys();
         for (t, _) in tables_mut(doc, "material") {
             hints.foreign(t, keys_of::<ShellMaterialSpec>(), &material, SOLID_ONLY);
         }
         if let Some((t, span)) = table_mut(doc, "simulation") {
-            let solid = crate::schema::simulation_keys();
+            let solid = crate::simulation_keys();
             hints.foreign(t, &simulation_keys(), &solid, SOLID_ONLY);
             let choice = Choice {
                 field: "integrator",

@@ -22,11 +22,20 @@ use toml::Spanned;
 /// The keys of each variant of a choice: its name and the keys its struct takes.
 pub(crate) type Variants = Vec<(&'static str, &'static [&'static str])>;
 
-/// A scene file's tables: serde reads them after [`Schema::prepare`] has split the tables
-/// that make a choice.
-pub(crate) trait Schema: serde::de::DeserializeOwned {
+/// A scene file's tables: serde reads them after `prepare` has split the tables that make a
+/// choice. Implemented by the two kinds of scene file; [`crate::parse`] reads either.
+pub trait Schema: serde::de::DeserializeOwned + private::Sealed {
     /// Splits the choosing tables of `doc`, and adds what to say when serde refuses a key.
+    #[doc(hidden)]
     fn prepare(doc: &mut DeTable<'_>, hints: &mut Hints) -> Result<(), Refusal>;
+}
+
+/// Keeps [`Schema`] to this crate's scene files.
+pub(crate) mod private {
+    /// Implemented by the scene files only.
+    pub trait Sealed {}
+    impl Sealed for crate::SceneFile {}
+    impl Sealed for crate::shell::ShellSceneFile {}
 }
 
 /// Where a choice's variant is named.
@@ -57,18 +66,18 @@ pub(crate) struct Choice {
 
 /// A problem found while splitting, before serde reads the document.
 #[derive(Debug)]
-pub(crate) struct Refusal {
+pub struct Refusal {
     /// Where in the text (bytes).
-    pub span: Range<usize>,
+    pub(crate) span: Range<usize>,
     /// What is wrong.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 /// What to say when serde refuses a value or key: the key's path in the file (from
 /// [`Hints::index`]), and for a key that [`split`] moved or [`Hints::foreign`] marked, which
 /// choice or kind of scene takes it.
 #[derive(Debug, Default)]
-pub(crate) struct Hints {
+pub struct Hints {
     hints: Vec<Hint>,
     paths: Vec<(Range<usize>, String)>,
 }

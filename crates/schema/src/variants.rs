@@ -18,10 +18,10 @@ pub enum Model<C, X> {
 
 impl<C, X> Model<C, X> {
     /// Which model this is.
-    pub fn kind(&self) -> crate::setup::ModelKind {
+    pub fn kind(&self) -> crate::ModelKind {
         match self {
-            Model::Chen(_) => crate::setup::ModelKind::Chen,
-            Model::Xu(_) => crate::setup::ModelKind::Xu,
+            Model::Chen(_) => crate::ModelKind::Chen,
+            Model::Xu(_) => crate::ModelKind::Xu,
         }
     }
 }
