@@ -85,7 +85,7 @@ fn an_egg_scene_cracks_and_writes_frames_with_pieces_and_crack_walls() {
 }
 
 #[test]
-fn tet_only_keys_are_named_with_what_to_do_instead() {
+fn tet_only_keys_are_named_as_keys_of_solid_scenes() {
     for (extra, key) in [
         (
             "[simulation]\nhorizon_factor = 1.45\n",
@@ -105,7 +105,7 @@ fn tet_only_keys_are_named_with_what_to_do_instead() {
         };
         let e = parse(&text).unwrap_err().to_string();
         assert!(
-            e.contains("egg.toml") && e.contains(key) && e.contains("tet scenes"),
+            e.contains("egg.toml") && e.contains(key) && e.contains("a key of solid scenes"),
             "{key}: {e}"
         );
     }

@@ -504,6 +504,87 @@ mod tests {
         assert_eq!(line_column("ab\ncdé\nf", 8), (3, 1));
     }
 
+    const SOLID: &str = "[mesh]\nprimitive = \"box\"\n\n[[material]]\nyoung = 1e9\n\
+                         poisson = 0.25\ndensity = 1000.0\n\n[simulation]\nduration = 1e-3\n";
+
+    /// The message of `text`'s refusal, with its line and column.
+    fn refusal<T: Schema + std::fmt::Debug>(text: &str) -> String {
+        parse::<T>(text).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn keys_reach_the_chosen_variants() {
+        let text = SOLID
+            .replace(
+                "density = 1000.0",
+                "density = 1000.0\nmodel = \"xu\"\nenergy = \"stvk\"",
+            )
+            .replace(
+                "duration = 1e-3",
+                "duration = 1e-3\ninfluence = \"linear\"\nintegrator = \"implicit\"\nhistory = 4",
+            );
+        let f = parse::<SceneFile>(&text).unwrap();
+        let Model::Xu(keys) = &f.material[0].model else {
+            panic!("{:?}", f.material[0].model)
+        };
+        assert_eq!(keys.energy, Some(Energy::Stvk));
+        let Model::Xu(settings) = &f.simulation.model else {
+            panic!("{:?}", f.simulation.model)
+        };
+        assert_eq!(settings.influence, Some(Influence::Linear));
+        let Integrator::Implicit(i) = &f.simulation.integrator else {
+            panic!("{:?}", f.simulation.integrator)
+        };
+        assert_eq!(i.history, Some(4));
+    }
+
+    #[test]
+    fn a_key_of_another_choice_names_the_choice_at_its_line() {
+        let chen_material =
+            SOLID.replace("duration = 1e-3", "duration = 1e-3\ninfluence = \"linear\"");
+        assert_eq!(
+            refusal::<SceneFile>(&chen_material),
+            "11:1: simulation.influence: a key of model = \"xu\"; the model of [[material]] is \
+             \"chen\""
+        );
+        let named_here = SOLID.replace("duration = 1e-3", "duration = 1e-3\nmodel = \"xu\"");
+        assert_eq!(
+            refusal::<SceneFile>(&named_here),
+            "11:1: simulation.model: named in [[material]]"
+        );
+        let two = format!("{SOLID}\n[[material]]\nmodel = \"xu\"\ndensity = 1.0\n");
+        assert_eq!(
+            refusal::<SceneFile>(&two),
+            "13:9: model \"xu\", but material[0] has model \"chen\": one model per scene"
+        );
+        let shell_key = SOLID.replace(
+            "density = 1000.0",
+            "density = 1000.0\nfracture_strain = 0.1",
+        );
+        assert_eq!(
+            refusal::<SceneFile>(&shell_key),
+            "8:1: material[0].fracture_strain: a key of thin-shell scenes ([shell]), not of \
+             solids ([mesh])"
+        );
+        let shell = "[shell]\nsurface = \"sphere\"\nthickness = 1e-3\n\n[[material]]\n\
+                     young = 1e9\npoisson = 0.25\ndensity = 1.0\ns_crit = 0.1\n\n\
+                     [simulation]\nduration = 1e-3\n";
+        assert_eq!(
+            refusal::<shell::ShellSceneFile>(shell),
+            "9:1: material[0].s_crit: a key of solid scenes ([mesh]), not of thin shells \
+             ([shell])"
+        );
+    }
+
+    #[test]
+    fn a_value_error_names_its_key() {
+        let text = SOLID.replace("young = 1e9", "young = \"stiff\"");
+        assert_eq!(
+            refusal::<SceneFile>(&text),
+            "5:9: material[0].young: invalid type: string \"stiff\", expected f64"
+        );
+    }
+
     #[test]
     fn a_shell_scene_is_told_by_its_table() {
         assert!(is_shell_scene("[shell]\nthickness = 1e-3\n"));
