@@ -296,29 +296,30 @@ pub fn cantilever(
     let (table, plot) = table_and_plot("Cantilever under gravity", "m", &runs);
     let finest = p2_levels.last().copied().unwrap_or(0);
     let text = format!(
-        "Static deflection of the centre of the free end of a 1 x 0.1 x 0.1 m bar (E = 1e8 Pa, \
-         nu = 0.3, rho = 1000 kg/m^3, g = 9.81 m/s^2 along -z), clamped at x = 0. Errors are \
-         against the project's own reference, quadratic tets (P2) at {finest} cells along: \
-         {reference:.6} m, which is {:+.3}% from the converged 3D answer of scikit-fem \
-         ({SCIKIT_FEM} m; Euler-Bernoulli {EULER_BERNOULLI} m, Timoshenko {TIMOSHENKO} m). Its \
-         last refinement moved the tip by {:.3}%, under a tenth of {resolved} of the {} \
-         peridynamic errors (those above {:.2}%): for those the reference is converged at the \
-         scale of what it measures. Linear tets \
-         (P1) lock in bending. Peridynamics relaxes dynamically (critical damping of the first \
-         bending mode, 12 time constants, a clamp layer one horizon thick behind x = 0); the \
-         tip moved by at most {:.1e} of itself over the last tenth of the relaxation. \
-         \"PD\" rows scale each particle's constants to its family (`correction = \
-         \"calibrated\"`, the default before issue 18); \"PD fitted\" rows fit each particle's \
-         dilatation weights to read every homogeneous strain exactly (`correction = \
-         \"fitted\"`, the default, docs/DECISIONS.md). Rows without a mesh \
-         named are on the Kuhn lattice (every cell the same six tets); \"mirrored\" rows cut \
-         every other cell along each axis as the mirror image of its neighbour \
-         (`structure = \"mirrored\"`), \"unstructured\" rows are the scenes' default mesh \
-         (Delaunay tets of well-spaced random points, seed {UNSTRUCTURED_SEED}, as many tets). \
-         The second table gives each series' observed order (the error's log ratio over the \
-         refinement's) and the tip's sideways deflection over its vertical one (the Kuhn \
-         lattice has no mirror symmetry across the bar; the mirrored one has it at an even \
-         count of cells across).",
+        "This case measures the static deflection of the centre of the free end of a \
+         1 x 0.1 x 0.1 m bar. The bar has E = 1e8 Pa, nu = 0.3 and rho = 1000 kg/m^3. Gravity \
+         is g = 9.81 m/s^2 along -z. The bar is clamped at x = 0. Errors are against the \
+         project's own reference: quadratic tets (P2) at {finest} cells along. That reference \
+         gives {reference:.6} m. This is {:+.3}% from the converged 3D answer of scikit-fem \
+         ({SCIKIT_FEM} m). Euler-Bernoulli gives {EULER_BERNOULLI} m, and Timoshenko gives \
+         {TIMOSHENKO} m. The reference's last refinement moved the tip by {:.3}%. This is \
+         under a tenth of {resolved} of the {} peridynamic errors, those above {:.2}%. For \
+         those errors, the reference is converged at the scale of what it measures. Linear \
+         tets (P1) lock in bending. Peridynamics relaxes dynamically. The damping is critical \
+         for the first bending mode, and the relaxation lasts 12 time constants. A clamp layer \
+         one horizon thick lies behind x = 0. The tip moved by at most {:.1e} of itself over \
+         the last tenth of the relaxation. \"PD\" rows scale each particle's constants to its \
+         family. This is `correction = \"calibrated\"`, the default before issue 18. \
+         \"PD fitted\" rows fit each particle's dilatation weights to read every homogeneous \
+         strain exactly. This is `correction = \"fitted\"`, the default (docs/DECISIONS.md). \
+         Rows without a mesh named are on the Kuhn lattice, where every cell is the same six \
+         tets. In \"mirrored\" rows, every other cell along each axis is cut as the mirror \
+         image of its neighbour (`structure = \"mirrored\"`). The \"unstructured\" rows are \
+         on the scenes' default mesh. It is Delaunay tets of well-spaced random points, seed \
+         {UNSTRUCTURED_SEED}, with as many tets. The second table gives each series' observed \
+         order. This is the error's log ratio over the refinement's. The table also gives the \
+         tip's sideways deflection over its vertical one. The Kuhn lattice has no mirror \
+         symmetry across the bar. The mirrored one has it at an even count of cells across.",
         100.0 * (reference / SCIKIT_FEM - 1.0),
         100.0 * moved,
         pd_errors.len(),

@@ -201,24 +201,27 @@ pub fn ghosts(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
     }
     let (table, plot) = table_and_plot("Ghosts: cantilever under gravity", "m", &runs);
     let text = format!(
-        "Ghost particles (`perifrac_physics::ghost`, docs/DECISIONS.md \"Ghost particles across \
-         the faces\") on the scenes' unstructured tets (seed {UNSTRUCTURED_SEED}) at k = 1.5. \
-         Every particle within a horizon of a side face is mirrored across it (across both or \
-         all three near an edge or corner); the image moves with its source by the least-squares \
-         fit of the displacement over the source's family (affine, or with its second \
-         derivatives: quadratic), stores no energy and completes its neighbours' families, and \
-         the correction's constants are fitted over the completed families. The cantilever of \
-         the `cantilever` case is held either by its layer of held particles behind x = 0 \
-         (\"held\") or by its own image across x = 0 moving as minus its source (\"mirror\", \
-         zero displacement on the face to first order, no layer); errors are against the \
-         `cantilever` case's quadratic tets at 80 cells along ({P2_TIP} m). A ghost's gain is \
-         the sum of its combination's coefficients' magnitudes (1: a copy of its source). The \
-         moduli are the `moduli` case's at 8 cells across, the bar's four side faces ghosted, \
-         its end layers held as there. The swinging and twisting bars are the `swing` and \
-         `twist` cases' at 4 cells across, held by their clamp layer, the four side faces \
-         ghosted, against those cases' reference (corotated quadratic tets at 40 and 80 cells \
-         along) by the same measure (the largest distance from the reference over particles \
-         and samples, over the diagonal)."
+        "This case tests ghost particles (`perifrac_physics::ghost`) on the scenes' \
+         unstructured tets (seed {UNSTRUCTURED_SEED}) at k = 1.5. The section \"Ghost \
+         particles across the faces\" of docs/DECISIONS.md describes them. Every particle \
+         within a horizon of a side face is mirrored across it. Near an edge or corner, it is \
+         mirrored across both or all three faces. The image moves with its source by the \
+         least-squares fit of the displacement over the source's family. The fit is affine, \
+         or quadratic with the second derivatives. The image stores no energy. It completes \
+         its neighbours' families. The correction's constants are fitted over the completed \
+         families. The cantilever of the `cantilever` case is held in one of two ways. The \
+         \"held\" clamp is its layer of held particles behind x = 0. The \"mirror\" clamp is \
+         its own image across x = 0, moving as minus its source. This gives zero displacement \
+         on the face to first order, with no layer. Errors are against the `cantilever` \
+         case's quadratic tets at 80 cells along ({P2_TIP} m). A ghost's gain is the sum of \
+         its combination's coefficients' magnitudes. A copy of its source has a gain of 1. \
+         The moduli are the `moduli` case's at 8 cells across. The bar's four side faces are \
+         ghosted. Its end layers are held as in that case. The swinging and twisting bars are \
+         the `swing` and `twist` cases' at 4 cells across. They are held by their clamp layer, \
+         and their four side faces are ghosted. They are measured against those cases' \
+         reference: corotated quadratic tets at 40 and 80 cells along. The measure is the \
+         same: the largest distance from the reference over particles and samples, over the \
+         diagonal."
     );
     Ok(CaseReport {
         name: "ghosts".into(),

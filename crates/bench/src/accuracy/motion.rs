@@ -301,23 +301,26 @@ fn motion_case(
     let (e, nu) = motion.young_poisson();
     let (kappa, mu) = motion.moduli();
     let text = format!(
-        "A 1 x 0.1 x 0.1 m bar clamped at x = 0, kappa = {kappa:e} Pa, mu = {mu:e} Pa \
-         (E = {e:.4e} Pa, nu = {nu:.3}), rho = 1000 kg/m^3, {}; {} s of motion. The error is the \
-         paper's: the largest distance between a particle and the reference at the same rest \
-         point, over the bar's particles and {SAMPLES} sample times, over the diagonal of the \
-         bounding box ({:.4} m); the paper reports under 10%. The reference is corotated \
-         quadratic tets at {fine_nx} cells along (the run took {:.1} s, {} steps at half its \
-         stable step). At {fem_nx} cells along the answer differs from it by {:.3}% of the \
-         diagonal, and halving the step there moves it by {:.4}%: for second-order elements \
-         the reference's own error is then at most {:.3}%, under a tenth of {resolved} of the \
-         {} peridynamic deviations (those above {:.2}%). Besides Chen's model (the paper's, \
-         stepped explicitly on the Kuhn lattice with the scalar calibration, `correction = \
-         \"calibrated\"`; \"fitted\" rows with the fitted dilatation of `correction = \
-         \"fitted\"`, the default, at k = 1.5, \"unstructured\" rows on the scenes' default \
-         box, Delaunay tets of well-spaced random points, seed 1), Xu's neo-Hookean-like model with the same E and nu (consistent \
-         moduli) runs explicitly and implicitly at {}, {} and {} steps per 1/24 s frame ({}, \
-         {} and {} steps over the {} s; the scene's implicit defaults, tolerance 1e-4 and at \
-         most 100 iterations a step, no damping but the step's own).",
+        "A 1 x 0.1 x 0.1 m bar is clamped at x = 0. Its moduli are kappa = {kappa:e} Pa and \
+         mu = {mu:e} Pa, so E = {e:.4e} Pa and nu = {nu:.3}. Its density is rho = 1000 kg/m^3. \
+         The bar is {}. The run covers {} s of motion. The error is the paper's. It is the \
+         largest distance between a particle and the reference at the same rest point. The \
+         largest is taken over the bar's particles and {SAMPLES} sample times. It is divided \
+         by the diagonal of the bounding box ({:.4} m). The paper reports under 10%. The \
+         reference is corotated quadratic tets at {fine_nx} cells along. Its run took {:.1} s \
+         and {} steps at half its stable step. At {fem_nx} cells along, the answer differs \
+         from it by {:.3}% of the diagonal. Halving the step there moves it by {:.4}%. For \
+         second-order elements, the reference's own error is then at most {:.3}%. This is \
+         under a tenth of {resolved} of the {} peridynamic deviations, those above {:.2}%. \
+         Chen's model is the paper's. It is stepped explicitly on the Kuhn lattice with the \
+         scalar calibration, `correction = \"calibrated\"`. The \"fitted\" rows use the \
+         fitted dilatation of `correction = \"fitted\"`, the default, at k = 1.5. The \
+         \"unstructured\" rows are on the scenes' default box. It is Delaunay tets of \
+         well-spaced random points, seed 1. Besides Chen's model, Xu's neo-Hookean-like model \
+         runs with the same E and nu (consistent moduli). It runs explicitly. It also runs \
+         implicitly at {}, {} and {} steps per 1/24 s frame. That is {}, {} and {} steps over \
+         the {} s. The implicit runs use the scene's implicit defaults: tolerance 1e-4 and at \
+         most 100 iterations a step. They have no damping but the step's own.",
         match motion {
             Motion::Swing => "released straight under gravity",
             Motion::Twist => "started with an angular velocity about x growing from 0 at the clamp to 40 rad/s at the free end",

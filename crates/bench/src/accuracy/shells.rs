@@ -197,12 +197,13 @@ pub fn shell_strip(
     }
     let title = "Thin shell: clamped strip under its own weight";
     let text = format!(
-        "A 10 x 2 cm steel strip (200 GPa, 7800 kg/m^3), 1 mm thick, `nu = 0`, clamped at x = 0 \
-         by two held rows of vertices, sags under gravity; the mean tip deflection against \
-         Kirchhoff's `q L^4 / (8 D)` = {reference:.4e} m (with `nu = 0` the strip is the wide \
-         plate). The shell relaxes with damping of twice its first bending frequency. The \
-         error is the clamp: the held second row shortens the free length by up to a grid \
-         spacing, so it falls at first order."
+        "A 10 x 2 cm steel strip sags under gravity. Its steel has a modulus of 200 GPa and a \
+         density of 7800 kg/m^3. The strip is 1 mm thick, with `nu = 0`. It is clamped at \
+         x = 0 by two held rows of vertices. The mean tip deflection is measured against \
+         Kirchhoff's `q L^4 / (8 D)` = {reference:.4e} m. With `nu = 0`, the strip is the wide \
+         plate. The shell relaxes with damping of twice its first bending frequency. The error \
+         comes from the clamp. The held second row shortens the free length by up to a grid \
+         spacing. So the error falls at first order."
     );
     Ok(plate_report("shell_strip", title, text, runs, &spacing))
 }
@@ -263,11 +264,12 @@ pub fn shell_plate(
     }
     let title = "Thin shell: simply supported square plate under uniform load";
     let text = format!(
-        "A 10 cm steel square (200 GPa, 7800 kg/m^3), 1 mm thick, `nu = 0.3`, its edges held in \
-         place and free to turn, under its own weight (a uniform {:.1} Pa); the centre \
-         deflection against Navier's series for the Kirchhoff-Love plate, {reference:.4e} m. \
-         It converges from below at about first order: the boundary triangles' free edges \
-         carry no curvature.",
+        "A 10 cm steel square is loaded by its own weight. Its steel has a modulus of 200 GPa \
+         and a density of 7800 kg/m^3. It is 1 mm thick, with `nu = 0.3`. Its edges are held \
+         in place and free to turn. Its weight is a uniform load of {:.1} Pa. The centre \
+         deflection is measured against Navier's series for the Kirchhoff-Love plate, \
+         {reference:.4e} m. It converges from below at about first order. The boundary \
+         triangles' free edges carry no curvature.",
         steel.areal_density() * GRAVITY
     );
     Ok(plate_report("shell_plate", title, text, runs, &spacing))
@@ -346,13 +348,14 @@ pub fn shell_membrane(
     let title = "Thin shell: sheet stretched in its plane";
     let (table, plot) = table_and_plot(title, "N", &runs);
     let text = format!(
-        "A 10 x 5 cm steel sheet, 1 mm thick, `nu = 0.3`, stretched 1% along x and contracted \
-         across by the plane-stress Poisson strain, so the stress is uniaxial; the pull on its \
-         right edge (the sum of the internal forces there) against `Y h W E_xx lambda_x` = \
-         {reference:.6e} N (first Piola stress times the rest width). The membrane strain of a \
-         triangle is exact for an affine map, so every resolution should match to round-off \
-         and every vertex off the loaded ends should be in balance (the table below gives the \
-         error unrounded and the largest force off the ends, against pulls of order 1e5 N)."
+        "A 10 x 5 cm steel sheet is 1 mm thick, with `nu = 0.3`. It is stretched 1% along x. \
+         It is contracted across by the plane-stress Poisson strain, so the stress is \
+         uniaxial. The pull on its right edge is the sum of the internal forces there. It is \
+         measured against `Y h W E_xx lambda_x` = {reference:.6e} N. This is the first Piola \
+         stress times the rest width. The membrane strain of a triangle is exact for an affine \
+         map. So every resolution should match to round-off. Every vertex off the loaded ends \
+         should be in balance. The table below gives the error unrounded. It also gives the \
+         largest force off the ends, against pulls of order 1e5 N."
     );
     Ok(CaseReport {
         name: "shell_membrane".into(),

@@ -251,24 +251,26 @@ pub fn moduli(effort: Effort, progress: &mut dyn FnMut(&str)) -> Result<CaseRepo
     }
     let (table, plot) = table_and_plot("Moduli from uniaxial tension", "Pa or 1", &runs);
     let text = format!(
-        "Young's modulus and Poisson's ratio measured on a 0.4 x 0.1 x 0.1 m bar in uniaxial \
-         tension (0.1% strain, both end layers one horizon deep held, relaxed with critical \
-         damping of the first axial mode): the stress is the pulled layer's reaction over the \
-         section, the strains are fitted over the middle third. The reference is the input, \
-         E = {YOUNG:e} Pa and nu = {POISSON}; the two rows of a run share its cost. A section of \
-         4 to 8 cells is 1.6 to 6.3 horizons across, so the particles near the surface, whose \
-         families are cut, weigh in (the scalar calibration of the \"PD\" rows, `correction = \
-         \"calibrated\"`, makes them stiffer, docs/model.md's constants softer: \
-         docs/DECISIONS.md). \"PD fitted\" rows fit each particle's dilatation weights to read \
-         every homogeneous strain exactly (`correction = \"fitted\"`, the default). The \
-         second table holds the horizon (m) fixed at its value on the coarsest bar at k = 1.5 \
-         while the cells shrink (m-convergence, the peridynamic literature's study: the \
-         discrete sums approach the nonlocal model's integrals); the first table's sweeps hold \
-         m fixed and shrink the horizon with the cells. The third sets Poisson's ratio to 0.1, \
-         0.3 and 0.4 on the finest bar at k = 1.5 (issue 18's targets at 8 cells across: E \
-         within 3%, nu within 0.02), on the Kuhn lattice of the other tables and, for the \
-         default correction, on the scenes' default box (Delaunay tets of well-spaced random \
-         points, seed {UNSTRUCTURED_SEED}; its horizon 1.5 of its own mean edge)."
+        "Young's modulus and Poisson's ratio are measured on a 0.4 x 0.1 x 0.1 m bar in \
+         uniaxial tension. The strain is 0.1%. Both end layers, one horizon deep, are held. The \
+         bar relaxes with critical damping of the first axial mode. The stress is the pulled \
+         layer's reaction over the section. The strains are fitted over the middle third. The \
+         reference is the input: E = {YOUNG:e} Pa and nu = {POISSON}. The two rows of a run \
+         share its cost. A section of 4 to 8 cells is 1.6 to 6.3 horizons across. So the \
+         particles near the surface, whose families are cut, weigh in. The scalar calibration \
+         of the \"PD\" rows (`correction = \"calibrated\"`) makes them stiffer. The constants \
+         of docs/model.md make them softer (docs/DECISIONS.md). \"PD fitted\" rows fit each \
+         particle's dilatation weights to read every homogeneous strain exactly. This is \
+         `correction = \"fitted\"`, the default. The second table holds the horizon (m) fixed \
+         at its value on the coarsest bar at k = 1.5 while the cells shrink. This is \
+         m-convergence, the peridynamic literature's study. In it, the discrete sums approach \
+         the nonlocal model's integrals. The first table's sweeps hold m fixed and shrink the \
+         horizon with the cells. The third table sets Poisson's ratio to 0.1, 0.3 and 0.4 on \
+         the finest bar at k = 1.5. Issue 18's targets at 8 cells across are E within 3% and \
+         nu within 0.02. The third table uses the Kuhn lattice of the other tables. For the \
+         default correction, it also uses the scenes' default box. That box is Delaunay tets \
+         of well-spaced random points, seed {UNSTRUCTURED_SEED}. Its horizon is 1.5 of its \
+         own mean edge."
     );
     Ok(CaseReport {
         name: "moduli".into(),
@@ -364,12 +366,12 @@ pub fn wave_speed(
     }
     let (table, plot) = table_and_plot("Bar wave speed", "m/s", &runs);
     let text = format!(
-        "A smooth pulse (half-Gaussian axial velocity, sigma = 0.25 m) started at the free end \
-         of a free 2 x 0.1 x 0.1 m bar; its leading edge is timed at half its peak at x = 0.6 \
-         and 1.4 m. The reference is the bar speed sqrt(E / rho) = {:.3} m/s; the pulse is long \
-         enough that its own dispersion in a continuum (Rayleigh-Love) is 0.12%, and its \
-         wavelengths are above the 12 horizons where the model's dispersion stays under 1% \
-         (docs/model.md section 2).",
+        "A smooth pulse is started at the free end of a free 2 x 0.1 x 0.1 m bar. The pulse \
+         is a half-Gaussian axial velocity with sigma = 0.25 m. Its leading edge is timed at \
+         half its peak at x = 0.6 and 1.4 m. The reference is the bar speed \
+         sqrt(E / rho) = {:.3} m/s. The pulse is long enough that its own dispersion in a \
+         continuum (Rayleigh-Love) is 0.12%. Its wavelengths are above the 12 horizons where \
+         the model's dispersion stays under 1% (docs/model.md section 2).",
         (YOUNG / DENSITY).sqrt()
     );
     Ok(CaseReport {

@@ -146,31 +146,33 @@ fn static_case(
     );
     let resolved = runs.iter().filter(|r| by_mesh < 0.1 * r.error).count();
     let text = format!(
-        "{} Peridynamics: Xu's model with the neo-Hookean-like curves (g = h = A1) and the \
-         consistent moduli (E = {:e} Pa, nu = {REFERENCE_POISSON}, rho = {REFERENCE_DENSITY} \
-         kg/m^3), a clamp layer one horizon thick behind x = 0{}, brought to rest by implicit \
-         steps of {DT} s (tolerance {:e}, at most {} iterations a step, mass damping {DAMPING} \
-         1/s) until a step moves no particle by more than {:e} m (at most {} steps). \
-         The error is the paper's: the largest distance between a particle of the bar proper \
-         (0 < x < 1) and the reference at its rest point, over the diagonal of the bounding box \
-         ({:.4} m). The reference is compressible neo-Hookean quadratic tets at {fine_nx} cells \
-         along (Newton with load stepping, {:.1} s); at {coarse_nx} cells along it differs \
-         from that by at most {:.3}% of the diagonal at the same points, under a tenth of \
+        "{} Peridynamics uses Xu's model with the neo-Hookean-like curves (g = h = A1) and the \
+         consistent moduli. These are E = {:e} Pa, nu = {REFERENCE_POISSON} and \
+         rho = {REFERENCE_DENSITY} kg/m^3. There is a clamp layer one horizon thick behind \
+         x = 0.{} The bar is brought to rest by implicit steps of {DT} s. The implicit solve \
+         has a tolerance of {:e} and at most {} iterations a step. Mass damping is {DAMPING} \
+         1/s. The steps go on until a step moves no particle by more than {:e} m, with at \
+         most {} steps. The error is the paper's. It is the largest distance between a \
+         particle of the bar proper (0 < x < 1) and the reference at its rest point. It is \
+         divided by the diagonal of the bounding box ({:.4} m). The reference is compressible \
+         neo-Hookean quadratic tets at {fine_nx} cells along. It is solved by Newton with load \
+         stepping in {:.1} s. At {coarse_nx} cells along, the reference differs from that by \
+         at most {:.3}% of the diagonal at the same points. This is under a tenth of \
          {resolved} of the {} peridynamic deviations.",
         match shape {
             Shape::Bend =>
-                "A 1 x 0.1 x 0.1 m bar clamped at x = 0 bends under its own weight \
-                 (g = 9.81 m/s^2 along -z): its free end turns about 45 degrees.",
+                "A 1 x 0.1 x 0.1 m bar clamped at x = 0 bends under its own weight, with \
+                 g = 9.81 m/s^2 along -z. Its free end turns about 45 degrees.",
             Shape::Twist =>
-                "A 1 x 0.1 x 0.1 m bar clamped at x = 0 has its end x = 1 turned \
-                 through 360 degrees about its axis (held axially), no gravity.",
+                "A 1 x 0.1 x 0.1 m bar is clamped at x = 0. Its end x = 1 is turned through \
+                 360 degrees about its axis and held axially. There is no gravity.",
         },
         shape.young(),
         match shape {
             Shape::Bend => String::new(),
             Shape::Twist => format!(
-                " and one beyond x = 1 turned rigidly through the full turn in {} steps, \
-                 then held",
+                " A second clamp layer one horizon thick, beyond x = 1, turns rigidly through \
+                 the full turn in {} steps. It is then held.",
                 set.turn_steps
             ),
         },

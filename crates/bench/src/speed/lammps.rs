@@ -28,21 +28,23 @@ use crate::{BenchError, Effort};
 pub fn lammps_match(effort: Effort) -> String {
     let (cells, m) = sizes(effort);
     format!(
-        "One problem for both codes: a glass cube (E = 70 GPa, nu = 0.22, 2500 kg/m^3), its \
-         halves moving apart at 1 m/s each, {STEPS} steps of 1 us, nothing breaking. perifrac: \
-         {cells} x {cells} x {cells} Kuhn cells, horizon 1.45 of the mean edge, run as `perifrac \
-         run` runs a scene (setup, steps, the frame files written); elastic is Chen's model \
-         without fracture, brittle has fracture on and contact between particles, as a \
-         breaking scene has by default. LAMMPS (`lmp`, `mpirun -np 2` on two cores, one OpenMP \
-         thread a rank): {m}^3 particles on a simple cubic lattice, horizon sqrt(11.5) spacings \
-         (about as many bonds a particle), `peri/lps` (state-based) against the elastic path and \
-         `peri/pmb` (bond-based, fracture and short-range contact built in) against the brittle \
-         one. Time per bond update compares the stepping loops; the whole run includes setup \
-         (LAMMPS: the wall time outside its loop) and output. perifrac's setup is that of any \
-         run of the scene after its first, which recalls the stable-step estimate the first \
-         left in the cache (one force evaluation in place of the iteration; the same bits); \
-         the first run's setup is given beside it. Peak memory is resident memory, \
-         LAMMPS's summed over its ranks (sampled every 20 ms)."
+        "One problem is run by both codes: a glass cube (E = 70 GPa, nu = 0.22, 2500 kg/m^3). \
+         Its halves move apart at 1 m/s each for {STEPS} steps of 1 us, with nothing breaking. \
+         In perifrac, the cube is {cells} x {cells} x {cells} Kuhn cells. Its horizon is 1.45 \
+         of the mean edge. It is run as `perifrac run` runs a scene: setup, steps, and the \
+         frame files written. The elastic path is Chen's model without fracture. The brittle \
+         path has fracture on and contact between particles, as a breaking scene has by \
+         default. LAMMPS runs as `lmp`, under `mpirun -np 2` on two cores, with one OpenMP \
+         thread a rank. It has {m}^3 particles on a simple cubic lattice. Its horizon is \
+         sqrt(11.5) spacings, for about as many bonds a particle. `peri/lps` (state-based) \
+         runs against the elastic path. `peri/pmb` (bond-based, fracture and short-range \
+         contact built in) runs against the brittle one. Time per bond update compares the \
+         stepping loops. The whole run includes setup and output. For LAMMPS, setup is the \
+         wall time outside its loop. The setup of perifrac is that of any run of the scene \
+         after its first. Such a run recalls the stable-step estimate the first run left in \
+         the cache. Recalling it takes one force evaluation in place of the iteration and gives \
+         the same bits. The first run's setup is given beside it. Peak memory is resident memory, \
+         sampled every 20 ms. For LAMMPS, it is summed over its ranks."
     )
 }
 
@@ -60,12 +62,12 @@ fn sizes(effort: Effort) -> (usize, usize) {
 }
 
 /// How the floor table is computed, for the report.
-pub const FLOOR_NOTE: &str = "The triad `a = b + s c` over arrays far larger than the caches \
-    (24 bytes an element, the best of five passes) measures the memory bandwidth on one thread \
-    and on all. The floor of a step is the time to stream the model's arrays twice (Chen's step \
-    makes two passes over the bonds: dilatation, then forces; the per-bond arrays are nearly all \
-    of the model's memory) at that bandwidth; \
-    gathers of neighbours' positions are not counted, so the floor is optimistic.";
+pub const FLOOR_NOTE: &str = "The triad `a = b + s c` measures the memory bandwidth on one \
+    thread and on all. It runs over arrays far larger than the caches, at 24 bytes an element. \
+    It takes the best of five passes. The floor of a step is the time to stream the model's \
+    arrays twice at that bandwidth. Chen's step makes two passes over the bonds: dilatation, \
+    then forces. The per-bond arrays are nearly all of the model's memory. Gathers of \
+    neighbours' positions are not counted, so the floor is optimistic.";
 
 /// Steps of every run.
 const STEPS: u32 = 100;
