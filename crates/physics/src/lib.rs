@@ -29,6 +29,7 @@
 #![warn(missing_docs)]
 
 pub mod anisotropy;
+pub mod crack_energy;
 pub mod energy;
 pub mod environment;
 pub mod error;

@@ -71,6 +71,20 @@ pub struct SolidJson {
     /// How far the model's constants stray from docs/model.md's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub correction: Option<CorrectionJson>,
+    /// The thresholds a material's `fracture_energy` set.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub from_energy: Vec<FromEnergyJson>,
+}
+
+/// A threshold set from a fracture energy, in `run.json`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct FromEnergyJson {
+    /// The material's index.
+    pub material: usize,
+    /// Its fracture energy `G_c` (J/m^2).
+    pub fracture_energy: f64,
+    /// The bond threshold it gives on the run's families (1).
+    pub s_crit: f64,
 }
 
 /// A thin shell's facts in `run.json`.

@@ -48,6 +48,9 @@ pub struct ChenKeys {
     pub yield_strain: Option<f64>,
     /// Plastic extension cap as a ratio of the rest bond length (default 0.2 when plastic).
     pub plastic_cap: Option<f64>,
+    /// Fracture energy `G_c` (J/m^2): what a unit area of crack costs. The bond threshold
+    /// follows from it, the moduli and the horizon; give it or `s_crit`.
+    pub fracture_energy: Option<f64>,
 }
 
 /// Material keys of Xu's model: the energy's curves and how the moduli become its constants.

@@ -40,6 +40,12 @@ pub(super) fn solid_setup(scene: &Path, setup: &Setup, on: &str) {
             ""
         },
     );
+    for e in &info.from_energy {
+        eprintln!(
+            "material {}: fracture energy {} J/m^2 gives s_crit {:.4e} on these bonds",
+            e.material, e.fracture_energy, e.s_crit
+        );
+    }
     let Some(c) = &info.correction else {
         return;
     };

@@ -261,6 +261,9 @@ pub trait Solver: Send {
     fn loads_mut(&mut self) -> &mut Loads;
     /// The force model.
     fn model(&self) -> &dyn ForceModel;
+    /// The force model, to probe it outside a step (energies, the damage check at chosen
+    /// positions); what it changes, the next step sees.
+    fn model_mut(&mut self) -> &mut dyn ForceModel;
     /// The time step (s).
     fn dt(&self) -> f64;
     /// Kinetic energy (J).
@@ -309,6 +312,9 @@ impl<M: ForceModel, I: Integrator<M>> Solver for Simulation<M, I> {
     }
     fn model(&self) -> &dyn ForceModel {
         &self.model
+    }
+    fn model_mut(&mut self) -> &mut dyn ForceModel {
+        &mut self.model
     }
     fn dt(&self) -> f64 {
         self.integrator.dt()

@@ -16,8 +16,8 @@ use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
 use crate::manifest::{
     balls_json, grounds_json, BodyJson, Bounds, CorrectionJson, FrameBodyJson, FrameJson,
-    GhostsJson, IterationsJson, SearchJson, SelfContactJson, SolidFrameJson, SolidJson, SolverJson,
-    MAIN_MASS_SHARE,
+    FromEnergyJson, GhostsJson, IterationsJson, SearchJson, SelfContactJson, SolidFrameJson,
+    SolidJson, SolverJson, MAIN_MASS_SHARE,
 };
 use crate::setup::{bounds, ModelKind, OutputOptions, Setup, SetupInfo};
 use crate::sinks::{FrameView, ParticlesView, SinkChoice, Sinks};
@@ -120,6 +120,15 @@ impl Body for Solid {
                         gain: g.gain.into(),
                     }),
                 }),
+                from_energy: info
+                    .from_energy
+                    .iter()
+                    .map(|e| FromEnergyJson {
+                        material: e.material,
+                        fracture_energy: e.fracture_energy,
+                        s_crit: e.s_crit,
+                    })
+                    .collect(),
             }),
         }
     }

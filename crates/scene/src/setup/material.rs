@@ -3,11 +3,12 @@
 
 use std::f64::consts::PI;
 
+use perifrac_physics::crack_energy::chen_crack_energy;
 use perifrac_physics::math::Mat3;
-use perifrac_physics::{ChenMaterial, FractureParams, XuMaterial, YieldParams};
+use perifrac_physics::{ChenMaterial, Discretization, FractureParams, XuMaterial, YieldParams};
 
 use crate::error::SceneError;
-use crate::schema::{ChenKeys, MaterialSpec, Model, SceneFile};
+use crate::schema::{ChenCorrection, ChenKeys, ChenSettings, MaterialSpec, Model, SceneFile};
 
 use super::check::Ctx;
 use super::defaults;
@@ -165,30 +166,126 @@ pub(super) fn elasticity(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<(f64, 
     }
 }
 
-/// The fracture criterion of `material[i]`, if it breaks.
+/// The fracture criterion of `material[i]`, if it breaks. A threshold from `fracture_energy`
+/// (J/m^2) is set once the families are built ([`thresholds_from_energy`]); until then its
+/// `s_crit` is 1.
 pub(super) fn fracture(
     ctx: &Ctx,
     i: usize,
     m: &MaterialSpec,
+    fracture_energy: Option<f64>,
 ) -> Result<Option<FractureParams>, SceneError> {
     let key = format!("material[{i}]");
-    if let Some(s) = m.s_crit {
-        if s.is_nan() || s <= 0.0 {
+    let s_crit = match (m.s_crit, fracture_energy) {
+        (Some(_), Some(_)) => {
             return Err(ctx.err(
-                format!("{key}.s_crit"),
-                format!("{s} must be positive (inf: no fracture)"),
-            ));
+                &key,
+                "give either s_crit or fracture_energy, not both (the threshold follows from \
+                 the energy)",
+            ))
         }
-        let alpha = ctx.non_negative(&format!("{key}.alpha"), m.alpha.unwrap_or(0.0))?;
-        Ok(s.is_finite().then_some(FractureParams { s_crit: s, alpha }))
-    } else if m.alpha.is_some() {
-        Err(ctx.err(
-            format!("{key}.alpha"),
-            "alpha scales the fracture threshold: give s_crit too",
-        ))
-    } else {
-        Ok(None)
+        (Some(s), None) => {
+            if s.is_nan() || s <= 0.0 {
+                return Err(ctx.err(
+                    format!("{key}.s_crit"),
+                    format!("{s} must be positive (inf: no fracture)"),
+                ));
+            }
+            s
+        }
+        (None, Some(g)) => {
+            if g.is_nan() || g <= 0.0 {
+                return Err(ctx.err(
+                    format!("{key}.fracture_energy"),
+                    format!("{g} J/m^2 must be positive (inf: no fracture)"),
+                ));
+            }
+            if g.is_finite() {
+                1.0
+            } else {
+                g
+            }
+        }
+        (None, None) if m.alpha.is_some() => {
+            return Err(ctx.err(
+                format!("{key}.alpha"),
+                "alpha scales the fracture threshold: give s_crit or fracture_energy too",
+            ))
+        }
+        (None, None) => return Ok(None),
+    };
+    let alpha = ctx.non_negative(&format!("{key}.alpha"), m.alpha.unwrap_or(0.0))?;
+    Ok(s_crit
+        .is_finite()
+        .then_some(FractureParams { s_crit, alpha }))
+}
+
+/// A threshold that `fracture_energy` set: the material, its fracture energy (J/m^2) and the
+/// `s_crit` (1) it gives on the scene's families.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FromEnergy {
+    /// The material's index.
+    pub material: usize,
+    /// Its fracture energy `G_c` (J/m^2).
+    pub fracture_energy: f64,
+    /// The threshold that costs `G_c` a unit area of crack on these families (1).
+    pub s_crit: f64,
+}
+
+/// Sets the threshold of every Chen material of `f` that gives a finite `fracture_energy`:
+/// `s_crit = sqrt(G_c / G_1)`, where `G_1` is the crack energy at `s_crit = 1` on `disc`'s
+/// families (physics' `crack_energy`), with the scalar correction of the constants unless the
+/// scene asks for none.
+pub(super) fn thresholds_from_energy(
+    f: &SceneFile,
+    materials: &mut Materials,
+    disc: &Discretization,
+) -> Vec<FromEnergy> {
+    let Materials::Chen(mats) = materials else {
+        return Vec::new();
+    };
+    let energies: Vec<Option<f64>> = f
+        .material
+        .iter()
+        .map(|m| match &m.model {
+            Model::Chen(k) => k.fracture_energy.filter(|g| g.is_finite()),
+            Model::Xu(_) => None,
+        })
+        .collect();
+    if energies.iter().all(Option::is_none) {
+        return Vec::new();
     }
+    let calibrated = !matches!(
+        f.simulation.model,
+        Model::Chen(ChenSettings {
+            correction: Some(ChenCorrection::None),
+            ..
+        })
+    );
+    let moduli: Vec<(f64, f64)> = mats
+        .iter()
+        .map(|m| (m.bulk_modulus, m.shear_modulus))
+        .collect();
+    let unit = chen_crack_energy(disc, &moduli, calibrated);
+    let mut set = Vec::new();
+    for (k, (mat, energy)) in mats.iter_mut().zip(&energies).enumerate() {
+        let (Some(g), Some(fracture)) = (energy, mat.fracture.as_mut()) else {
+            continue;
+        };
+        let g1 = unit.get(k).copied().unwrap_or(0.0);
+        // a material with no particle never breaks: its threshold does not matter
+        fracture.s_crit = if g1 > 0.0 {
+            (g / g1).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        set.push(FromEnergy {
+            material: k,
+            fracture_energy: *g,
+            s_crit: fracture.s_crit,
+        });
+    }
+    set
 }
 
 /// The orthonormal axes of `material[i]` as the columns of a matrix (identity by default).
@@ -237,7 +334,7 @@ fn chen_material(
             ChenMaterial::elastic(k, mu, m.density)
         }
     };
-    mat.fracture = fracture(ctx, i, m)?;
+    mat.fracture = fracture(ctx, i, m, keys.fracture_energy)?;
     let psi0 = match (keys.yield_psi0, keys.yield_strain) {
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key, "give either yield_psi0 or yield_strain, not both"))

@@ -8,6 +8,7 @@ pub use check::MAX_FPS;
 pub(crate) mod colliders;
 pub(crate) mod loads;
 mod material;
+pub use material::FromEnergy;
 pub(crate) mod math;
 mod mesh;
 mod radii;
@@ -171,6 +172,8 @@ pub struct SetupInfo {
     pub rest_bounds: ([f64; 3], [f64; 3]),
     /// Crack faces cut at the start.
     pub precrack_faces: usize,
+    /// The thresholds set from a material's `fracture_energy`.
+    pub from_energy: Vec<FromEnergy>,
     /// The force model.
     pub model: ModelKind,
     /// The integrator.
@@ -314,13 +317,14 @@ impl Setup {
         let estimate = WorkEstimate::of_mesh(built, horizon_factor, extra);
         limits.check_memory(&estimate).map_err(too_large)?;
 
-        let (materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
+        let (mut materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
         times.mesh = stage.elapsed();
         let stage = Instant::now();
         let (mut disc, report) =
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
         disc.set_materials(&ids).map_err(physics)?;
+        let from_energy = material::thresholds_from_energy(f, &mut materials, &disc);
         times.families = stage.elapsed();
         let stage = Instant::now();
         let counted = estimate.with_bonds(report.bonds as u64, extra);
@@ -492,6 +496,7 @@ impl Setup {
             up: math::up_from_gravity(gravity),
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
+            from_energy,
             correction,
             ghosts,
             estimate,

@@ -34,7 +34,7 @@ pub(super) fn xu_material(
     let poisson = (3.0 * kappa - 2.0 * mu) / (2.0 * (3.0 * kappa + mu));
     let mut mat = XuMaterial::from_young_poisson(young, poisson, m.density, g, h, rule)
         .map_err(|e| ctx.err(&key, e.to_string()))?;
-    mat.fracture = fracture(ctx, i, m)?;
+    mat.fracture = fracture(ctx, i, m, None)?;
     let frame = axes(ctx, i, m)?;
     if let Some(s) = m.anisotropy {
         for (k, &v) in s.iter().enumerate() {

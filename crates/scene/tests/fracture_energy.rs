@@ -1,0 +1,145 @@
+//! A material given a fracture energy `G_c` costs `G_c` per unit area of crack: a bar whose two
+//! halves are pulled apart, slowly and rigidly, dissipates `G_c` times its section at every
+//! resolution. The key and its neighbours are refused as they should be.
+
+use std::path::Path;
+
+use perifrac_scene::{Scene, Setup};
+
+/// A bar `cells` long and `across` x `across` in section, `h` (m) a cell, of glass with the
+/// fracture energy `g` (J/m^2), on the mesh `structure`.
+fn bar(cells: usize, across: usize, h: f64, g: f64, structure: &str) -> String {
+    format!(
+        "[mesh]\nprimitive = \"box\"\nsize = [{}, {}, {}]\ncells = [{cells}, {across}, {across}]\n\
+         structure = \"{structure}\"\n\n[[material]]\nyoung = 72e9\npoisson = 0.22\n\
+         density = 2440.0\nfracture_energy = {g}\n\n[simulation]\nduration = 1e-6\n\
+         self_contact = false\n",
+        cells as f64 * h,
+        across as f64 * h,
+        across as f64 * h,
+    )
+}
+
+/// The energy (J) that breaking dissipates while the halves of the bar in `text` (split at
+/// `x_split`, m) are moved apart rigidly by a growing gap, until no bond joins them.
+fn pull_apart(text: &str, x_split: f64) -> (f64, f64) {
+    let scene = Scene::parse(text, Path::new("bar.toml")).unwrap();
+    let mut setup = Setup::new(&scene, Some(1)).unwrap();
+    let s_crit = setup.info.from_energy[0].s_crit;
+    let horizon = setup.info.horizon;
+    let solver = setup.driver.solver_mut();
+    let rest: Vec<[f64; 3]> = solver.positions().to_vec();
+    let model = solver.model_mut();
+    let mut broken = Vec::new();
+    let mut dissipated = 0.0;
+    // the gap grows by 1% a step from a tenth of the critical extension
+    let mut gap = 0.1 * s_crit * horizon;
+    let mut y = rest.clone();
+    loop {
+        for (p, x) in y.iter_mut().zip(&rest) {
+            let side = if x[0] > x_split { 0.5 } else { -0.5 };
+            p[0] = x[0] + side * gap;
+        }
+        let before = model.elastic_energy(&y);
+        broken.clear();
+        model.break_bonds(&y, &mut broken);
+        let after = model.elastic_energy(&y);
+        dissipated += before - after;
+        if gap > horizon && after <= 1e-9 * dissipated {
+            break;
+        }
+        gap *= 1.01;
+    }
+    (dissipated, s_crit)
+}
+
+/// `D / (G_c A)` of a bar 8 cells long and `across` cells across (4 cm square) on `structure`.
+fn dissipated_share(across: usize, structure: &str) -> f64 {
+    let (g, cells, h) = (8.0, 8, 0.04 / across as f64);
+    let (d, s_crit) = pull_apart(&bar(cells, across, h, g, structure), 0.5 * cells as f64 * h);
+    let share = d / (g * (across as f64 * h).powi(2));
+    eprintln!("{structure}, {across} across: s_crit {s_crit:.4e}, D / (G_c A) = {share:.4}");
+    share
+}
+
+#[test]
+fn a_bar_pulled_apart_dissipates_its_fracture_energy() {
+    // Three resolutions of the default (unstructured) mesh and one of the Kuhn lattice. The
+    // threshold is set from whole families, so a section's edge, where families are cut, costs
+    // a little less; the bulk, from two widths' difference (`bulk_by_width_difference`), is
+    // 0.993 to 0.998 unstructured and 0.943 to 0.946 on the lattice. Measured here: 1.047,
+    // 1.038, 1.021 (8, 12, 16 across) and 0.962 (the lattice, 12 across). The issue asks for
+    // 10%.
+    for (across, structure) in [
+        (8, "unstructured"),
+        (12, "unstructured"),
+        (16, "unstructured"),
+        (12, "lattice"),
+    ] {
+        let share = dissipated_share(across, structure);
+        assert!(
+            (share - 1.0).abs() < 0.1,
+            "{structure}, {across} across: {share}"
+        );
+    }
+}
+
+#[test]
+#[ignore = "a measurement (about 6 minutes): cargo test -p perifrac-scene --test fracture_energy -- --ignored --nocapture"]
+fn bulk_by_width_difference() {
+    // D(W) = G W^2 - 4 gamma W for a square section of side W, gamma the energy a unit length
+    // of the section's edge saves: two widths at one cell size give G alone
+    let g = 8.0;
+    for structure in ["lattice", "unstructured"] {
+        for across in [8usize, 12, 16] {
+            let (cells, h) = (8, 0.04 / across as f64);
+            let x_split = 0.5 * cells as f64 * h;
+            let (d1, _) = pull_apart(&bar(cells, across, h, g, structure), x_split);
+            let (d2, _) = pull_apart(&bar(cells, 2 * across, h, g, structure), x_split);
+            let (w1, w2) = (across as f64 * h, 2.0 * across as f64 * h);
+            let bulk = (d2 / w2 - d1 / w1) / (w2 - w1);
+            eprintln!(
+                "{structure}, {across} across: D / (G_c A) = {:.4}, the bulk's {:.4}",
+                d1 / (g * w1 * w1),
+                bulk / g
+            );
+        }
+    }
+}
+
+#[test]
+fn fracture_energy_is_refused_beside_s_crit_or_when_not_positive() {
+    let base = bar(4, 2, 0.01, 8.0, "lattice");
+    let refusal = |text: String| {
+        let scene = match Scene::parse(&text, Path::new("bar.toml")) {
+            Ok(s) => s,
+            Err(e) => return e.to_string(),
+        };
+        match Setup::new(&scene, Some(1)) {
+            Ok(_) => panic!("accepted:\n{text}"),
+            Err(e) => e.to_string(),
+        }
+    };
+    let both = refusal(base.replace("fracture_energy = 8", "fracture_energy = 8\ns_crit = 1e-4"));
+    assert!(
+        both.contains("material[0]") && both.contains("not both"),
+        "{both}"
+    );
+    for bad in ["0.0", "-3.0", "nan"] {
+        let e = refusal(base.replace("fracture_energy = 8", &format!("fracture_energy = {bad}")));
+        assert!(
+            e.contains("material[0].fracture_energy") && e.contains("must be positive"),
+            "{bad}: {e}"
+        );
+    }
+    // Xu's model has no such key yet: its bond energy is another one
+    let xu = refusal(base.replace("density = 2440.0", "density = 2440.0\nmodel = \"xu\""));
+    assert!(xu.contains("a key of model = \"chen\""), "{xu}");
+    // and alpha scales either threshold
+    let scene = Scene::parse(
+        &base.replace("fracture_energy = 8", "fracture_energy = 8\nalpha = 0.5"),
+        Path::new("bar.toml"),
+    )
+    .unwrap();
+    assert!(Setup::new(&scene, Some(1)).is_ok());
+}
