@@ -68,7 +68,12 @@ pub fn parse<T: Schema>(text: &str) -> Result<T, ParseError> {
     let mut doc = DeTable::parse(text).map_err(|e| at(e.span(), e.message()))?;
     let mut hints = Hints::default();
     hints.index(doc.get_ref());
-    T::prepare(doc.get_mut(), &mut hints).map_err(|r| at(Some(r.span), &r.message))?;
+    T::prepare(doc.get_mut(), &mut hints).map_err(|r| {
+        at(
+            Some(r.span.clone()),
+            &hints.message(Some(r.span), &r.message),
+        )
+    })?;
     T::deserialize(toml::de::Deserializer::from(doc))
         .map_err(|e| at(e.span(), &hints.message(e.span(), e.message())))
 }
@@ -555,7 +560,8 @@ mod tests {
         let two = format!("{SOLID}\n[[material]]\nmodel = \"xu\"\ndensity = 1.0\n");
         assert_eq!(
             refusal::<SceneFile>(&two),
-            "13:9: model \"xu\", but material[0] has model \"chen\": one model per scene"
+            "13:9: material[1].model: model \"xu\", but material[0] has model \"chen\": one \
+             model per scene"
         );
         let shell_key = SOLID.replace(
             "density = 1000.0",
