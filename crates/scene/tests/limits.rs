@@ -555,3 +555,21 @@ fn a_ghost_layer_too_big_for_memory_is_refused_before_the_model_over_it() {
     let msg = e.to_string();
     assert!(msg.contains("of memory"), "{msg}");
 }
+
+#[test]
+fn a_modulus_softer_than_any_solid_is_reported() {
+    // `young = 70` meant 70 GPa: the run goes on (a jelly may be that soft in a test), and the
+    // setup names the material for the warning `perifrac run` prints
+    let soft = Setup::with_limits(
+        &scene(&TINY.replace("young = 1e7", "young = 70")),
+        None,
+        &limits(),
+    );
+    let soft = soft.unwrap().info.too_soft;
+    assert_eq!(soft.len(), 1, "{soft:?}");
+    assert_eq!(soft[0].0, 0);
+    // E back from the bulk and shear moduli: a rounding away from 70
+    assert!((soft[0].1 / 70.0 - 1.0).abs() < 1e-12, "{soft:?}");
+    let firm = Setup::with_limits(&scene(TINY), None, &limits()).unwrap();
+    assert!(firm.info.too_soft.is_empty());
+}

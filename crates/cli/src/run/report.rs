@@ -40,6 +40,12 @@ pub(super) fn solid_setup(scene: &Path, setup: &Setup, on: &str) {
             ""
         },
     );
+    for (k, young) in &info.too_soft {
+        eprintln!(
+            "warning: material {k} has a Young's modulus of {young:e} Pa, softer than any solid \
+             (the scene's units are SI: young = 70e9 is 70 GPa)"
+        );
+    }
     for e in &info.from_energy {
         eprintln!(
             "material {}: fracture energy {} J/m^2 gives s_crit {:.4e} on these bonds",

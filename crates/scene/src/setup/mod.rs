@@ -79,6 +79,10 @@ pub mod defaults {
     /// ... or when any passes this: that particle rings at about the square root of it times
     /// the frequency of a full family, and sets the stable step alone.
     pub const CORRECTION_WARNING_MAX: f64 = 100.0;
+    /// `perifrac run` warns on a material whose Young's modulus (Pa) is under this: the softest
+    /// gels are about a kilopascal, so a smaller value is most likely a unit slip (`young = 70`
+    /// for 70 GPa).
+    pub const SOFTEST_SOLID: f64 = 1e3;
 }
 
 pub use perifrac_schema::ModelKind;
@@ -174,6 +178,9 @@ pub struct SetupInfo {
     pub precrack_faces: usize,
     /// The thresholds set from a material's `fracture_energy`.
     pub from_energy: Vec<FromEnergy>,
+    /// Materials softer than any solid: index and Young's modulus (Pa) under
+    /// [`defaults::SOFTEST_SOLID`].
+    pub too_soft: Vec<(usize, f64)>,
     /// The force model.
     pub model: ModelKind,
     /// The integrator.
@@ -497,6 +504,10 @@ impl Setup {
             rest_bounds: bounds(mesh.rest_positions()),
             precrack_faces,
             from_energy,
+            too_soft: (0..f.material.len())
+                .map(|k| (k, materials.young(k)))
+                .filter(|&(_, e)| e < defaults::SOFTEST_SOLID)
+                .collect(),
             correction,
             ghosts,
             estimate,
