@@ -232,6 +232,30 @@ fn an_event_search_run_resumes_byte_identically() {
 }
 
 #[test]
+fn a_loaded_run_resumes_byte_identically() {
+    // a ramped pressure on the slab's top with the event search: the loads' strengths,
+    // positions and work are saved with the rest and undone with each rejected trial, so the
+    // resumed run's forces and run.json's load_work are the same bits
+    let tmp = tempfile::tempdir().unwrap();
+    let load = "[[load]]\npressure = 2e7\nramp = 5e-4\n\
+                region = { min = [-1.0, -1.0, 0.059], max = [1.0, 1.0, 1.0] }\n\n[simulation]";
+    let scene = variant(
+        tmp.path(),
+        "wall.toml",
+        &[
+            ("cells = [24, 24, 3]", "cells = [8, 8, 1]"),
+            ("duration = 0.005", "duration = 0.002"),
+            ("dt = \"auto\"", "dt = \"auto\"\nevent_search = true"),
+            ("[simulation]", load),
+        ],
+    );
+    let spf = setup(&scene, 4).steps_per_frame;
+    let whole = check_resume(&scene, 4, &[(Some(spf + 3), None), (None, Some(2))]);
+    let work = whole.solid().unwrap().load_work.unwrap();
+    assert!(work > 0.0, "{whole:?}");
+}
+
+#[test]
 fn a_self_contact_run_resumes_byte_identically() {
     let tmp = tempfile::tempdir().unwrap();
     let scene = variant(

@@ -166,6 +166,9 @@ pub struct SolidFrameJson {
     /// overlap so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub self_contact: Option<SelfContactJson>,
+    /// Runs with `[[load]]` tables: the work they have done so far (J).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_work: Option<f64>,
 }
 
 /// A thin shell's frame counts in `run.json`.

@@ -79,6 +79,8 @@ const VELOCITY: &str =
     "[[velocity]]\nlinear = [1.0, 0.0, 0.0]\nregion = { min = [0.5, 0.0, 0.0], max = [1.0, 0.1, 0.1] }";
 const PRECRACK: &str = "[[precrack]]\npoint = [0.5, 0.05, 0.05]\nnormal = [1.0, 0.0, 0.0]\n\
                         region = { min = [0.4, 0.0, 0.0], max = [0.6, 0.1, 0.05] }";
+const LOAD: &str =
+    "[[load]]\npressure = 1e3\nregion = { min = [0.9, 0.0, 0.0], max = [1.0, 0.1, 0.1] }";
 const BALL: &str = "[[ball]]\ncenter = [0.5, 0.05, 1.0]\nradius = 0.1";
 
 /// The tables of tet scenes.
@@ -124,6 +126,8 @@ fn tet_tables() -> Vec<Table> {
             vec![with(TET, VELOCITY)],
         ),
         t("[[precrack]]", &["precrack"], vec![with(TET, PRECRACK)]),
+        t("[[load]]", &["load"], vec![with(TET, LOAD)]),
+        t("[load.region]", &["load", "region"], vec![with(TET, LOAD)]),
         t(
             "[precrack.region]",
             &["precrack", "region"],

@@ -146,6 +146,9 @@ pub struct SceneFile {
     /// Cracks present at the start.
     #[serde(default)]
     pub precrack: Vec<PrecrackSpec>,
+    /// Tractions, pressures and body forces on regions.
+    #[serde(default)]
+    pub load: Vec<LoadSpec>,
     /// What is written, and how often.
     #[serde(default)]
     pub output: OutputSpec,
@@ -366,6 +369,26 @@ pub struct PrecrackSpec {
     pub normal: [f64; 3],
     /// Faces whose centroid lies in this box are cut.
     pub region: Region,
+}
+
+/// A load on a region, fixed in the rest frame (a dead load): a traction or a pressure on the
+/// boundary faces whose centroid lies in the region, or a body force on the particles whose
+/// rest barycentre does. Give exactly one of `traction`, `pressure` and `body_force`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LoadSpec {
+    /// Where it acts; default everywhere.
+    pub region: Option<Region>,
+    /// Traction (Pa): force per unit rest area of the boundary faces.
+    pub traction: Option<[f64; 3]>,
+    /// Pressure (Pa) on the boundary faces, along each face's inward rest normal.
+    pub pressure: Option<f64>,
+    /// Body force (N/m^3) on the particles.
+    pub body_force: Option<[f64; 3]>,
+    /// Time (s) over which the load rises linearly from zero; default 0: at once.
+    pub ramp: Option<f64>,
+    /// Time (s) at which the load stops; default never.
+    pub until: Option<f64>,
 }
 
 /// Frame output.

@@ -147,15 +147,19 @@ pub(super) fn summary(s: &Summary, wall: f64, resumed_at: u64, threads: usize, d
         s.time,
     );
     let balls = s.solid().map_or(0.0, |b| b.ball_kinetic_energy);
+    let loads = s.solid().and_then(|b| b.load_work);
     eprintln!(
-        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J{}",
+        "energy at the end: kinetic {:.4e} J, elastic {:.4e} J{}{}",
         s.kinetic_energy,
         s.elastic_energy,
         if balls > 0.0 {
             format!(", balls {balls:.4e} J")
         } else {
             String::new()
-        }
+        },
+        loads.map_or(String::new(), |w| format!(
+            "; the loads did {w:.4e} J of work"
+        ))
     );
     match &s.body {
         BodySummary::Solid(b) => solid_lines(b, s.steps),

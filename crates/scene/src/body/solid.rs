@@ -12,6 +12,7 @@ use perifrac_topology::Surface;
 use super::{Body, BodySummary, Head, Plan, StepError};
 use crate::debris::split_debris;
 use crate::driver::{Driver, StageTimes};
+use crate::environment::Loads;
 use crate::error::SceneError;
 use crate::fragments::FragmentBirth;
 use crate::manifest::{
@@ -42,6 +43,8 @@ pub struct SolidSummary {
     /// Self contact, when the scene has it: pair-list builds, and the most pairs in contact
     /// in a step with the deepest overlap (m, and as a share of the contact distance).
     pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
+    /// The work the scene's `[[load]]` tables did (J), when it has some.
+    pub load_work: Option<f64>,
 }
 
 /// A tet solid being run.
@@ -192,6 +195,7 @@ impl Body for Solid {
             self_contact: d
                 .self_contact()
                 .map(|c| (c.rebuilds(), d.self_contact_deepest())),
+            load_work: d.influences().get::<Loads>().map(Loads::work),
         })
     }
 }
@@ -323,6 +327,7 @@ impl Solid {
                         deepest_share: deepest.max_overlap_share,
                     }
                 }),
+                load_work: driver.influences().get::<Loads>().map(Loads::work),
             }),
         })
     }

@@ -6,6 +6,7 @@
 //! the bits are the same for any thread count.
 
 mod colliders;
+mod loads;
 mod self_contact;
 
 use std::any::Any;
@@ -16,6 +17,7 @@ use perifrac_physics::math::Vec3;
 use perifrac_physics::{Environment, External, ImplicitEnvironment, PhysicsError, Solver};
 
 pub use colliders::CollidersInfluence;
+pub use loads::{Loads, RegionLoad};
 pub use self_contact::SelfContactInfluence;
 
 /// One thing acting on the particles from outside the material. Every method but

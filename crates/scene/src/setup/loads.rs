@@ -7,7 +7,10 @@ use crate::error::SceneError;
 use crate::schema::{Region, SceneFile, VelocitySpec};
 
 use super::check::Ctx;
-use perifrac_physics::math::cross;
+use crate::environment::RegionLoad;
+use perifrac_physics::math::{add, cross, norm, scale, sub};
+use perifrac_topology::faces::FACE_CORNERS;
+use perifrac_topology::{TetMesh, NO_TET};
 
 use super::math::bounds;
 
@@ -108,4 +111,117 @@ pub(crate) fn select(
         ));
     }
     Ok(picked)
+}
+
+/// The `[[load]]` tables as forces (N) on particles at full strength, from the rest mesh
+/// (before any initial crack): a traction or pressure on the boundary faces whose centroid lies
+/// in the region, summed into each face's tet; a body force on the particles in it, times each
+/// one's volume (m^3).
+pub(super) fn region_loads(
+    ctx: &Ctx,
+    f: &SceneFile,
+    mesh: &TetMesh,
+    rest: &[[f64; 3]],
+    volumes: &[f64],
+) -> Result<Vec<RegionLoad>, SceneError> {
+    let mut out = Vec::with_capacity(f.load.len());
+    for (k, l) in f.load.iter().enumerate() {
+        let key = format!("load[{k}]");
+        if let Some(r) = &l.region {
+            ctx.region(&format!("{key}.region"), r)?;
+        }
+        let ramp = match l.ramp {
+            Some(t) => ctx.non_negative(&format!("{key}.ramp"), t)?,
+            None => 0.0,
+        };
+        let until = match l.until {
+            Some(t) if t.is_nan() || t <= 0.0 => {
+                return Err(ctx.err(
+                    format!("{key}.until"),
+                    format!("{t} s must be positive (inf: never)"),
+                ))
+            }
+            Some(t) => t,
+            None => f64::INFINITY,
+        };
+        let (particles, forces) = match (l.traction, l.pressure, l.body_force) {
+            (Some(t), None, None) => {
+                let t = ctx.finite3(&format!("{key}.traction"), t)?;
+                on_faces(ctx, &key, mesh, l.region.as_ref(), |area| {
+                    scale(t, norm(area))
+                })?
+            }
+            (None, Some(p), None) => {
+                if !p.is_finite() {
+                    return Err(ctx.err(format!("{key}.pressure"), format!("{p} must be finite")));
+                }
+                on_faces(ctx, &key, mesh, l.region.as_ref(), |area| scale(area, -p))?
+            }
+            (None, None, Some(b)) => {
+                let b = ctx.finite3(&format!("{key}.body_force"), b)?;
+                let picked = select(ctx, &format!("{key}.region"), rest, l.region.as_ref())?;
+                let forces = picked
+                    .iter()
+                    .map(|&i| scale(b, volumes[i as usize]))
+                    .collect();
+                (picked, forces)
+            }
+            _ => {
+                return Err(ctx.err(
+                    &key,
+                    "give exactly one of traction (Pa), pressure (Pa) and body_force (N/m^3)",
+                ))
+            }
+        };
+        out.push(RegionLoad {
+            particles,
+            forces,
+            ramp,
+            until,
+        });
+    }
+    Ok(out)
+}
+
+/// The particles of the tets with rest boundary faces whose centroid lies in `region`, each
+/// with the sum of `force(area)` over those faces, `area` the face's outward area vector
+/// (m^2); none selected is an error naming `key`.
+fn on_faces(
+    ctx: &Ctx,
+    key: &str,
+    mesh: &TetMesh,
+    region: Option<&Region>,
+    force: impl Fn([f64; 3]) -> [f64; 3],
+) -> Result<(Vec<u32>, Vec<[f64; 3]>), SceneError> {
+    let x = mesh.positions();
+    let (mut particles, mut forces) = (Vec::new(), Vec::new());
+    for (t, (corners, across)) in mesh.tets().iter().zip(mesh.neighbours()).enumerate() {
+        let mut sum = [0.0; 3];
+        let mut any = false;
+        for (face, &other) in FACE_CORNERS.iter().zip(across) {
+            if other != NO_TET {
+                continue;
+            }
+            let [a, b, c] = face.map(|k| x[corners[k] as usize]);
+            let centroid = [0, 1, 2].map(|d| (a[d] + b[d] + c[d]) / 3.0);
+            if region.is_some_and(|r| !r.contains(centroid)) {
+                continue;
+            }
+            // FACE_CORNERS winds each face outward of a positively oriented tet
+            let area = scale(cross(sub(b, a), sub(c, a)), 0.5);
+            sum = add(sum, force(area));
+            any = true;
+        }
+        if any {
+            particles.push(t as u32);
+            forces.push(sum);
+        }
+    }
+    if particles.is_empty() {
+        return Err(ctx.err(
+            format!("{key}.region"),
+            "selects no boundary face: no face of the surface has its centroid in the box",
+        ));
+    }
+    Ok((particles, forces))
 }

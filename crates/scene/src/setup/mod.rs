@@ -325,6 +325,8 @@ impl Setup {
         limits.check_memory(&estimate).map_err(too_large)?;
 
         let (mut materials, ids) = material::materials_by_region(&ctx, f, &rest, horizon)?;
+        // on the rest boundary, before any initial crack adds faces
+        let region_loads = loads::region_loads(&ctx, f, &mesh, &rest, &volumes)?;
         let (adjacency, precrack_faces) = mesh::precracks(&ctx, f, &mut mesh, &rest)?;
         times.mesh = stage.elapsed();
         let stage = Instant::now();
@@ -513,7 +515,7 @@ impl Setup {
             estimate,
             times,
         };
-        let driver = Driver::new(
+        let mut driver = Driver::new(
             mesh,
             solver,
             colliders.map(|(c, _)| c),
@@ -528,6 +530,12 @@ impl Setup {
                 .filter_map(|(i, b)| b.until.map(|t| (t, i)))
                 .collect(),
         );
+        if !region_loads.is_empty() {
+            driver.add_influence(Box::new(crate::environment::Loads::new(
+                region_loads,
+                &rest,
+            )));
+        }
         Ok(Setup {
             scene_path: scene.path.clone(),
             scene_text: scene.text.clone(),
