@@ -49,8 +49,9 @@ pub struct Loads {
     last: Vec<Vec3>,
     /// Work done so far (J).
     work: f64,
-    /// An implicit step's end time (s) and strengths.
-    step_end: (f64, Vec<f64>),
+    /// The end of the step being taken: its time (s) and each load's strength then.
+    end_time: f64,
+    end_strength: Vec<f64>,
 }
 
 impl Loads {
@@ -68,7 +69,8 @@ impl Loads {
             strength: vec![0.0; n],
             last,
             work: 0.0,
-            step_end: (0.0, vec![0.0; n]),
+            end_time: 0.0,
+            end_strength: vec![0.0; n],
         }
     }
 
@@ -82,12 +84,21 @@ impl Loads {
         &self.loads
     }
 
-    /// Moves to positions `y` at time `t` with strengths `now`: adds the work done since the
-    /// positions last seen (the trapezoid of the forces at both ends, as velocity Verlet
-    /// applies them) and keeps `y`.
-    fn advance(&mut self, y: &[Vec3], t: f64, now: &[f64]) {
+    /// Sets the step's end to time `t` (s) and each load's strength then.
+    fn end_at(&mut self, t: f64) {
+        self.end_time = t;
+        for (s, l) in self.end_strength.iter_mut().zip(&self.loads) {
+            *s = l.strength(t);
+        }
+    }
+
+    /// Moves to positions `y` at the step's end: adds the work done since the positions last
+    /// seen (the trapezoid of the forces at both ends, as velocity Verlet applies them) and
+    /// keeps `y`.
+    fn advance(&mut self, y: &[Vec3]) {
         let mut k = 0;
-        for (l, (&before, &after)) in self.loads.iter().zip(self.strength.iter().zip(now)) {
+        let ends = self.strength.iter().zip(&self.end_strength);
+        for (l, (&before, &after)) in self.loads.iter().zip(ends) {
             let mean = 0.5 * (before + after);
             for (&p, f) in l.particles.iter().zip(&l.forces) {
                 let x = y[p as usize];
@@ -96,15 +107,8 @@ impl Loads {
                 k += 1;
             }
         }
-        self.strength.copy_from_slice(now);
-        self.time = t;
-    }
-
-    /// Each load's strength at `t` (s), into `out`.
-    fn strengths(&self, t: f64, out: &mut [f64]) {
-        for (s, l) in out.iter_mut().zip(&self.loads) {
-            *s = l.strength(t);
-        }
+        self.strength.copy_from_slice(&self.end_strength);
+        self.time = self.end_time;
     }
 
     fn write(&self, w: &mut Writer) {
@@ -134,10 +138,8 @@ impl Influence for Loads {
 
     fn add_forces(&mut self, ext: &mut External<'_>) {
         // the forces at the end of this (sub-)step
-        let t = self.time + ext.dt;
-        let mut now = std::mem::take(&mut self.step_end.1);
-        self.strengths(t, &mut now);
-        for (l, &s) in self.loads.iter().zip(&now) {
+        self.end_at(self.time + ext.dt);
+        for (l, &s) in self.loads.iter().zip(&self.end_strength) {
             if s == 0.0 {
                 continue;
             }
@@ -146,15 +148,11 @@ impl Influence for Loads {
                 ext.forces[i] = add(ext.forces[i], scale(*f, s));
             }
         }
-        self.advance(ext.positions, t, &now);
-        self.step_end.1 = now;
+        self.advance(ext.positions);
     }
 
     fn begin(&mut self, dt: f64, _y0: &[Vec3], _v0: &[Vec3], _m: &[f64]) -> Result<(), String> {
-        let t = self.time + dt;
-        let mut end = std::mem::take(&mut self.step_end.1);
-        self.strengths(t, &mut end);
-        self.step_end = (t, end);
+        self.end_at(self.time + dt);
         Ok(())
     }
 
@@ -165,11 +163,10 @@ impl Influence for Loads {
         grad: Option<(&mut [Vec3], &mut [Vec3])>,
     ) -> f64 {
         // -F . (q - q0) over the step, F at the step's end strength
-        let (_, end) = &self.step_end;
         let mut u = 0.0;
         let mut k = 0;
         let mut gq = grad.map(|(gq, _)| gq);
-        for (l, &s) in self.loads.iter().zip(end) {
+        for (l, &s) in self.loads.iter().zip(&self.end_strength) {
             for (&p, f) in l.particles.iter().zip(&l.forces) {
                 let i = p as usize;
                 let force = scale(*f, s);
@@ -185,10 +182,8 @@ impl Influence for Loads {
 
     fn end(&mut self, q: &[Vec3], _c: &[Vec3], _v: &[Vec3]) {
         // the implicit step applies the end strength over the whole step
-        let (t, end) = std::mem::take(&mut self.step_end);
-        self.strength.copy_from_slice(&end);
-        self.advance(q, t, &end);
-        self.step_end = (t, end);
+        self.strength.copy_from_slice(&self.end_strength);
+        self.advance(q);
     }
 
     fn save_trial(&self, w: &mut Writer) {
