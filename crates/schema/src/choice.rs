@@ -82,12 +82,19 @@ pub struct Hints {
     paths: Vec<(Range<usize>, String)>,
 }
 
+/// What to say of a refused key at `span`.
 #[derive(Debug)]
 struct Hint {
     span: Range<usize>,
-    key: String,
-    expected: Vec<&'static str>,
-    note: Option<String>,
+    say: Say,
+}
+
+#[derive(Debug)]
+enum Say {
+    /// Which choice or kind of scene takes the key.
+    Note(String),
+    /// The key and every key its table takes.
+    Expected(String, Vec<&'static str>),
 }
 
 impl Hints {
@@ -141,19 +148,22 @@ impl Hints {
         if !message.starts_with("unknown field") {
             return message.to_string();
         }
-        // a key may have a hint of each kind: the note of either, the expected keys of the last
-        let at: Vec<&Hint> = self.hints.iter().filter(|h| h.span == *span).collect();
-        let Some(last) = at.last() else {
-            return message.to_string();
+        // a key may have a hint of each kind: a note says more than the list
+        let at = || self.hints.iter().filter(|h| h.span == *span);
+        let note = at().find_map(|h| match &h.say {
+            Say::Note(note) => Some(note.clone()),
+            Say::Expected(..) => None,
+        });
+        let listed = || {
+            at().find_map(|h| match &h.say {
+                Say::Expected(key, expected) => Some(format!(
+                    "unknown field `{key}`, expected {}",
+                    expected_list(expected)
+                )),
+                Say::Note(_) => None,
+            })
         };
-        match at.iter().find_map(|h| h.note.as_ref()) {
-            Some(note) => note.clone(),
-            None => format!(
-                "unknown field `{}`, expected {}",
-                last.key,
-                expected_list(&last.expected)
-            ),
-        }
+        note.or_else(listed).unwrap_or_else(|| message.to_string())
     }
 
     /// Marks the keys of `table` that it does not take (`accepted`) but the other kind of scene
@@ -170,9 +180,7 @@ impl Hints {
             if !accepted.contains(&k) && foreign.contains(&k) {
                 self.hints.push(Hint {
                     span: key.span(),
-                    key: k.to_string(),
-                    expected: accepted.to_vec(),
-                    note: Some(format!("a key of {note}")),
+                    say: Say::Note(format!("a key of {note}")),
                 });
             }
         }
@@ -285,9 +293,10 @@ pub(crate) fn split(
             };
             hints.hints.push(Hint {
                 span: key.span(),
-                key: name.to_string(),
-                expected: expected.clone(),
-                note,
+                say: match note {
+                    Some(note) => Say::Note(note),
+                    None => Say::Expected(name.to_string(), expected.clone()),
+                },
             });
         }
         if let Some((k, v)) = table.remove_entry(name) {
