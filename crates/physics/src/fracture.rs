@@ -67,6 +67,12 @@ impl Damage {
         }
     }
 
+    /// Sets the threshold `s_crit` (1) of particle `i` (a threshold set from a fracture energy,
+    /// once the model's families are known).
+    pub(crate) fn set_s_crit(&mut self, i: usize, s_crit: f64) {
+        self.s_crit[i] = s_crit;
+    }
+
     /// Damage `phi_i = 1 - n_i / N_i` (0 for a particle that never had bonds).
     pub fn phi(&self, i: usize) -> f64 {
         if self.initial[i] == 0 {

@@ -53,20 +53,36 @@ fn pull_apart(text: &str, x_split: f64) -> (f64, f64) {
     (dissipated, s_crit)
 }
 
-/// `D / (G_c A)` of a bar 8 cells long and `across` cells across (4 cm square) on `structure`.
-fn dissipated_share(across: usize, structure: &str) -> f64 {
-    let (g, cells, h) = (8.0, 8, 0.04 / across as f64);
-    let (d, s_crit) = pull_apart(&bar(cells, across, h, g, structure), 0.5 * cells as f64 * h);
+/// `D / (G_c A)` of a bar 8 cells long and `across` cells across (4 cm square) on `structure`,
+/// with `material` and `simulation` keys added to those tables.
+fn dissipated_share(
+    across: usize,
+    structure: &str,
+    g: f64,
+    material: &str,
+    simulation: &str,
+) -> f64 {
+    let (cells, h) = (8, 0.04 / across as f64);
+    let text = bar(cells, across, h, g, structure)
+        .replace(
+            "density = 2440.0\n",
+            &format!("density = 2440.0\n{material}"),
+        )
+        .replace("[simulation]\n", &format!("[simulation]\n{simulation}"));
+    let (d, s_crit) = pull_apart(&text, 0.5 * cells as f64 * h);
     let share = d / (g * (across as f64 * h).powi(2));
-    eprintln!("{structure}, {across} across: s_crit {s_crit:.4e}, D / (G_c A) = {share:.4}");
+    eprintln!(
+        "{structure} {material:?} {simulation:?}, {across} across: s_crit {s_crit:.4e}, \
+         D / (G_c A) = {share:.4}"
+    );
     share
 }
 
 #[test]
 fn a_bar_pulled_apart_dissipates_its_fracture_energy() {
     // Three resolutions of the default (unstructured) mesh and one of the Kuhn lattice. The
-    // threshold is set from whole families, so a section's edge, where families are cut, costs
-    // a little less; the bulk, from two widths' difference (`bulk_by_width_difference`), is
+    // threshold is set from whole families, and a section's edge, where families are cut and
+    // their constants scaled up, costs a little more; the bulk, from two widths' difference (`bulk_by_width_difference`), is
     // 0.993 to 0.998 unstructured and 0.943 to 0.946 on the lattice. Measured here: 1.047,
     // 1.038, 1.021 (8, 12, 16 across) and 0.962 (the lattice, 12 across). The issue asks for
     // 10%.
@@ -76,7 +92,7 @@ fn a_bar_pulled_apart_dissipates_its_fracture_energy() {
         (16, "unstructured"),
         (12, "lattice"),
     ] {
-        let share = dissipated_share(across, structure);
+        let share = dissipated_share(across, structure, 8.0, "", "");
         assert!(
             (share - 1.0).abs() < 0.1,
             "{structure}, {across} across: {share}"
@@ -85,21 +101,57 @@ fn a_bar_pulled_apart_dissipates_its_fracture_energy() {
 }
 
 #[test]
+fn xu_bars_dissipate_their_fracture_energy() {
+    // Xu's model: glass at its brittle threshold on the fitted dilatation at two resolutions
+    // and on the normalised one; and a material whose bonds break where the curves are far
+    // from quadratic (G_c = 2e8 J/m^2: s_crit 0.49). The threshold follows from a rigid
+    // opening with the weights normalised again at each break, as the model does; from the
+    // state with every crossing bond at the threshold at once, the bars dissipated 1.19 to
+    // 1.20 G_c. Measured: 1.071 and 1.034 (8 and 16 across; 1.060 at 12), 1.059 without the
+    // fit, 1.057 at s_crit 0.49, 1.060 with St Venant-Kirchhoff's curve (12 across). As for
+    // Chen's model, the excess is the section's edge and shrinks with the resolution. The
+    // issue asks for 10%.
+    let xu = "model = \"xu\"\n";
+    for (across, g, material, simulation) in [
+        (8, 8.0, xu, ""),
+        (16, 8.0, xu, ""),
+        (12, 8.0, xu, "correction = \"none\"\n"),
+        (12, 2e8, xu, ""),
+    ] {
+        let share = dissipated_share(across, "unstructured", g, material, simulation);
+        assert!(
+            (share - 1.0).abs() < 0.1,
+            "{material:?} {simulation:?}, {across} across: {share}"
+        );
+    }
+}
+
+#[test]
 #[ignore = "a measurement (about 6 minutes): cargo test -p perifrac-scene --test fracture_energy -- --ignored --nocapture"]
 fn bulk_by_width_difference() {
-    // D(W) = G W^2 - 4 gamma W for a square section of side W, gamma the energy a unit length
-    // of the section's edge saves: two widths at one cell size give G alone
+    // D(W) = G W^2 + 4 gamma W for a square section of side W, gamma the energy a unit length
+    // of the section's edge adds: two widths at one cell size give G alone
     let g = 8.0;
-    for structure in ["lattice", "unstructured"] {
+    for (structure, material) in [
+        ("lattice", ""),
+        ("unstructured", ""),
+        ("unstructured", "model = \"xu\"\n"),
+    ] {
         for across in [8usize, 12, 16] {
             let (cells, h) = (8, 0.04 / across as f64);
             let x_split = 0.5 * cells as f64 * h;
-            let (d1, _) = pull_apart(&bar(cells, across, h, g, structure), x_split);
-            let (d2, _) = pull_apart(&bar(cells, 2 * across, h, g, structure), x_split);
+            let text = |n: usize| {
+                bar(cells, n, h, g, structure).replace(
+                    "density = 2440.0\n",
+                    &format!("density = 2440.0\n{material}"),
+                )
+            };
+            let (d1, _) = pull_apart(&text(across), x_split);
+            let (d2, _) = pull_apart(&text(2 * across), x_split);
             let (w1, w2) = (across as f64 * h, 2.0 * across as f64 * h);
             let bulk = (d2 / w2 - d1 / w1) / (w2 - w1);
             eprintln!(
-                "{structure}, {across} across: D / (G_c A) = {:.4}, the bulk's {:.4}",
+                "{structure} {material:?}, {across} across: D / (G_c A) = {:.4}, the bulk's {:.4}",
                 d1 / (g * w1 * w1),
                 bulk / g
             );
@@ -132,9 +184,12 @@ fn fracture_energy_is_refused_beside_s_crit_or_when_not_positive() {
             "{bad}: {e}"
         );
     }
-    // Xu's model has no such key yet: its bond energy is another one
-    let xu = refusal(base.replace("density = 2440.0", "density = 2440.0\nmodel = \"xu\""));
-    assert!(xu.contains("a key of model = \"chen\""), "{xu}");
+    // Xu's model refuses them alike
+    let xu = refusal(base.replace(
+        "fracture_energy = 8",
+        "fracture_energy = -8\nmodel = \"xu\"",
+    ));
+    assert!(xu.contains("material[0].fracture_energy"), "{xu}");
     // and alpha scales either threshold
     let scene = Scene::parse(
         &base.replace("fracture_energy = 8", "fracture_energy = 8\nalpha = 0.5"),

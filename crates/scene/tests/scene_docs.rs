@@ -282,12 +282,29 @@ fn table_keys(table: &Table) -> BTreeSet<String> {
 }
 
 /// `docs/scenes.md` read as sections (the text after `## `) and the keys their table rows name
-/// in the first column, in backticks. A section without rows maps to an empty set.
+/// in the first column, in backticks. Only a table whose header's first cell is `key` lists
+/// keys (a table of values, such as the presets', does not). A section without rows maps to an
+/// empty set.
 fn doc_sections(text: &str) -> BTreeMap<String, BTreeSet<String>> {
     let mut sections: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     let mut current: Option<String> = None;
     let mut in_code = false;
+    let mut other_table = false;
     for (n, line) in text.lines().enumerate() {
+        if !line.trim_start().starts_with('|') {
+            other_table = false;
+        } else if line.trim_start().starts_with("| ")
+            && !line.contains("| key |")
+            && text
+                .lines()
+                .nth(n + 1)
+                .is_some_and(|next| next.trim_start().starts_with("|---"))
+        {
+            other_table = true;
+        }
+        if other_table {
+            continue;
+        }
         if line.trim_start().starts_with("```") {
             in_code = !in_code;
             continue;

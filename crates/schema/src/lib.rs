@@ -212,6 +212,8 @@ impl Region {
 pub struct MaterialSpec {
     /// A name for messages.
     pub name: Option<String>,
+    /// Handbook constants (`young`, `poisson`, `density`, `fracture_energy`) for the keys not given.
+    pub preset: Option<Preset>,
     /// Particles whose rest barycentre lies in this box get this material.
     pub region: Option<Region>,
     /// Young's modulus (Pa), with `poisson`; or give `bulk_modulus` and `shear_modulus`.
@@ -222,10 +224,13 @@ pub struct MaterialSpec {
     pub bulk_modulus: Option<f64>,
     /// Shear modulus mu (Pa).
     pub shear_modulus: Option<f64>,
-    /// Density (kg/m^3).
-    pub density: f64,
+    /// Density (kg/m^3); a `preset` gives one.
+    pub density: Option<f64>,
     /// Critical stretch measure `s_crit` (dimensionless); absent or `inf`: no fracture.
     pub s_crit: Option<f64>,
+    /// Fracture energy `G_c` (J/m^2): what a unit area of crack costs. The bond threshold
+    /// follows from it, the model's energy and the horizon; give it or `s_crit`.
+    pub fracture_energy: Option<f64>,
     /// Damage scaling of the threshold (default 0).
     pub alpha: Option<f64>,
     /// Anisotropy (default isotropic). Chen: the diagonal of `G` in `omega = delta / |G xi|`

@@ -48,9 +48,6 @@ pub struct ChenKeys {
     pub yield_strain: Option<f64>,
     /// Plastic extension cap as a ratio of the rest bond length (default 0.2 when plastic).
     pub plastic_cap: Option<f64>,
-    /// Fracture energy `G_c` (J/m^2): what a unit area of crack costs. The bond threshold
-    /// follows from it, the moduli and the horizon; give it or `s_crit`.
-    pub fracture_energy: Option<f64>,
 }
 
 /// Material keys of Xu's model: the energy's curves and how the moduli become its constants.
@@ -65,6 +62,27 @@ pub struct XuKeys {
     pub h: Option<BTreeMap<String, f64>>,
     /// How `young` and `poisson` become the model's `lambda` and `mu` (default consistent).
     pub moduli: Option<Moduli>,
+}
+
+/// A material preset: handbook constants for the keys a material does not give
+/// (docs/scenes.md, "Material presets", has the values and their sources).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Preset {
+    /// Soda-lime glass.
+    Glass,
+    /// Alumina, 99.5%.
+    Ceramic,
+    /// Normal-strength concrete (C30).
+    Concrete,
+    /// Structural steel.
+    Steel,
+    /// Aluminium alloy 6061-T6.
+    Aluminium,
+    /// Natural rubber.
+    Rubber,
+    /// Acrylic glass (PMMA).
+    Acrylic,
 }
 
 /// Xu's named energies.

@@ -13,12 +13,16 @@ use super::xu_kernel::{
     LinearH, NeoHookeanH, Normalised, PerParticleH, Stored, StvkH, Unit, XuInputs,
 };
 use super::{same_features, ForceModel, QuasiNewtonModel, XuMaterial};
+use crate::crack_energy::{
+    material_means, opening_integral, sample, OpeningBond, OpeningParticle, ParticleShare,
+};
 use crate::error::PhysicsError;
 use crate::fracture::Damage;
 use crate::math::{sub, Vec3};
 use crate::par::{map_particles, map_particles2};
 use crate::particles::Discretization;
 use perifrac_checkpoint::{CheckpointError, Reader, Writer};
+use rayon::prelude::*;
 
 /// The influence function `wt(r / delta)` before normalisation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -288,6 +292,72 @@ impl XuModel {
             wr: &s.wr,
             inv_norm: &self.inv_norm,
             alive: self.damage.as_ref().map(|d| d.bond_state()),
+        }
+    }
+
+    /// The crack energy per unit area (J/m^2) of each material whose bonds break at the measure
+    /// `s_crit[m]` (1): the energy a slow, rigid opening of a plane dissipates, bond by bond and
+    /// with the weights normalised again at each break as the model does, integrated over the
+    /// plane's offset and averaged over whole families (`crack_energy.rs`), at most
+    /// [`SAMPLE_PER_MATERIAL`](crate::crack_energy::SAMPLE_PER_MATERIAL) of them a material. It uses the model's own curves, so it holds
+    /// at any stretch; a material with no particle gets 0.
+    pub fn crack_energy(&self, s_crit: &[f64]) -> Vec<f64> {
+        let s = &self.setup;
+        let disc = &s.disc;
+        let (fam, x, volumes) = (disc.family(), disc.rest_positions(), disc.volumes());
+        let delta = disc.horizon();
+        let ids = disc.materials();
+        let per: Vec<ParticleShare> = sample(disc, s.g.len())
+            .into_par_iter()
+            .map(|(i, whole)| {
+                let m = ids[i] as usize;
+                let bonds: Vec<OpeningBond> = fam
+                    .range(i)
+                    .map(|k| {
+                        let j = fam.neighbours()[k] as usize;
+                        let r = fam.rest_lengths()[k];
+                        let v = volumes[j];
+                        let kernel = s.kernel.as_ref().map_or(1.0, |(own, _)| own[k]);
+                        // theta - 1 = inv_norm sum f V e with the fit, as without it with wr
+                        let fit_v = self.fit.as_ref().map_or(s.wr[k], |f| f.pairs()[k][0]) * v;
+                        OpeningBond {
+                            x: sub(x[j], x[i]),
+                            r,
+                            wt_v: s.wr[k] * r * v,
+                            energy_v: s.wr[k] * r * v * kernel,
+                            wr_v: s.wr[k] * v,
+                            fit_v,
+                        }
+                    })
+                    .collect();
+                let particle = OpeningParticle {
+                    lambda: s.lambda[i],
+                    mu: s.mu[i],
+                    g: &s.g[m],
+                    h: &s.h[m],
+                    e_c: s_crit.get(m).copied().unwrap_or(0.0) * delta,
+                };
+                ParticleShare {
+                    material: m,
+                    volume: volumes[i],
+                    energy: opening_integral(&bonds, particle),
+                    whole,
+                }
+            })
+            .collect();
+        material_means(&per, s.g.len())
+    }
+
+    /// Sets the fracture threshold `s_crit` (1) of every particle of material `material`; a
+    /// model built without fracture has no threshold to set and is left as it is.
+    pub fn set_s_crit(&mut self, material: usize, s_crit: f64) {
+        let Some(damage) = self.damage.as_mut() else {
+            return;
+        };
+        for (i, &m) in self.setup.disc.materials().iter().enumerate() {
+            if m as usize == material {
+                damage.set_s_crit(i, s_crit);
+            }
         }
     }
 

@@ -167,7 +167,7 @@ pub(super) fn check_settings(ctx: &Ctx, f: &SceneFile) -> Result<(), SceneError>
             (_, Some(r)) => ctx.region(&format!("{key}.region"), r)?,
             _ => {}
         }
-        ctx.density(&format!("{key}.density"), m.density)?;
+        super::material::density(ctx, i, m)?;
     }
     check_colliders(ctx, &f.ground, &f.ball)?;
     for (i, a) in f.anchor.iter().enumerate() {

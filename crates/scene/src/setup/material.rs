@@ -3,9 +3,11 @@
 
 use std::f64::consts::PI;
 
-use perifrac_physics::crack_energy::chen_crack_energy;
+use perifrac_physics::crack_energy::{chen_crack_energy, solve_thresholds};
 use perifrac_physics::math::Mat3;
-use perifrac_physics::{ChenMaterial, Discretization, FractureParams, XuMaterial, YieldParams};
+use perifrac_physics::{
+    ChenMaterial, Discretization, FractureParams, XuMaterial, XuModel, YieldParams,
+};
 
 use crate::error::SceneError;
 use crate::schema::{ChenCorrection, ChenKeys, ChenSettings, MaterialSpec, Model, SceneFile};
@@ -166,6 +168,15 @@ pub(super) fn elasticity(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<(f64, 
     }
 }
 
+/// The density (kg/m^3) of `material[i]`, given or from its preset.
+pub(super) fn density(ctx: &Ctx, i: usize, m: &MaterialSpec) -> Result<f64, SceneError> {
+    let key = format!("material[{i}].density");
+    match m.density {
+        Some(d) => ctx.density(&key, d),
+        None => Err(ctx.err(key, "missing: give the density (kg/m^3) or a preset")),
+    }
+}
+
 /// The fracture criterion of `material[i]`, if it breaks. A threshold from `fracture_energy`
 /// (J/m^2) is set once the families are built ([`thresholds_from_energy`]); until then its
 /// `s_crit` is 1.
@@ -173,10 +184,9 @@ pub(super) fn fracture(
     ctx: &Ctx,
     i: usize,
     m: &MaterialSpec,
-    fracture_energy: Option<f64>,
 ) -> Result<Option<FractureParams>, SceneError> {
     let key = format!("material[{i}]");
-    let s_crit = match (m.s_crit, fracture_energy) {
+    let s_crit = match (m.s_crit, m.fracture_energy) {
         (Some(_), Some(_)) => {
             return Err(ctx.err(
                 &key,
@@ -232,10 +242,18 @@ pub struct FromEnergy {
     pub s_crit: f64,
 }
 
+/// The finite fracture energies (J/m^2) of `f`'s materials, `None` where a material gives none.
+fn energies(f: &SceneFile) -> Vec<Option<f64>> {
+    f.material
+        .iter()
+        .map(|m| m.fracture_energy.filter(|g| g.is_finite()))
+        .collect()
+}
+
 /// Sets the threshold of every Chen material of `f` that gives a finite `fracture_energy`:
 /// `s_crit = sqrt(G_c / G_1)`, where `G_1` is the crack energy at `s_crit = 1` on `disc`'s
 /// families (physics' `crack_energy`), with the scalar correction of the constants unless the
-/// scene asks for none.
+/// scene asks for none. Xu's thresholds are set on the built model ([`xu_thresholds_from_energy`]).
 pub(super) fn thresholds_from_energy(
     f: &SceneFile,
     materials: &mut Materials,
@@ -244,14 +262,7 @@ pub(super) fn thresholds_from_energy(
     let Materials::Chen(mats) = materials else {
         return Vec::new();
     };
-    let energies: Vec<Option<f64>> = f
-        .material
-        .iter()
-        .map(|m| match &m.model {
-            Model::Chen(k) => k.fracture_energy.filter(|g| g.is_finite()),
-            Model::Xu(_) => None,
-        })
-        .collect();
+    let energies = energies(f);
     if energies.iter().all(Option::is_none) {
         return Vec::new();
     }
@@ -283,6 +294,29 @@ pub(super) fn thresholds_from_energy(
             material: k,
             fracture_energy: *g,
             s_crit: fracture.s_crit,
+        });
+    }
+    set
+}
+
+/// Sets the threshold of every Xu material of `f` that gives a finite `fracture_energy`, on the
+/// built `model`: the `s_crit` at which its crack energy (`XuModel::crack_energy`, exact in the
+/// model's curves) equals `G_c`.
+pub(super) fn xu_thresholds_from_energy(f: &SceneFile, model: &mut XuModel) -> Vec<FromEnergy> {
+    let energies = energies(f);
+    if energies.iter().all(Option::is_none) {
+        return Vec::new();
+    }
+    let target: Vec<f64> = energies.iter().map(|g| g.unwrap_or(0.0)).collect();
+    let s_crit = solve_thresholds(&target, |s| model.crack_energy(s));
+    let mut set = Vec::new();
+    for (k, energy) in energies.iter().enumerate() {
+        let Some(g) = energy else { continue };
+        model.set_s_crit(k, s_crit[k]);
+        set.push(FromEnergy {
+            material: k,
+            fracture_energy: *g,
+            s_crit: s_crit[k],
         });
     }
     set
@@ -326,15 +360,15 @@ fn chen_material(
     let mut mat = match (m.young, m.poisson) {
         (Some(e), Some(nu)) => {
             elasticity(ctx, i, m)?;
-            ChenMaterial::from_young_poisson(e, nu, m.density)
+            ChenMaterial::from_young_poisson(e, nu, density(ctx, i, m)?)
                 .map_err(|e| ctx.err(&key, e.to_string()))?
         }
         _ => {
             let (k, mu) = elasticity(ctx, i, m)?;
-            ChenMaterial::elastic(k, mu, m.density)
+            ChenMaterial::elastic(k, mu, density(ctx, i, m)?)
         }
     };
-    mat.fracture = fracture(ctx, i, m, keys.fracture_energy)?;
+    mat.fracture = fracture(ctx, i, m)?;
     let psi0 = match (keys.yield_psi0, keys.yield_strain) {
         (Some(_), Some(_)) => {
             return Err(ctx.err(&key, "give either yield_psi0 or yield_strain, not both"))

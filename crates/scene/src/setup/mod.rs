@@ -11,6 +11,7 @@ mod material;
 pub use material::FromEnergy;
 pub(crate) mod math;
 mod mesh;
+pub mod presets;
 mod radii;
 mod self_contact;
 mod solver;
@@ -275,7 +276,8 @@ impl Setup {
             file: scene.path.clone(),
             message,
         };
-        let f = &scene.file;
+        let resolved = presets::resolve(&scene.file);
+        let f = &resolved;
         check::check_settings(&ctx, f)?;
         solver::check_integrator(&ctx, &f.simulation)?;
         let implicit = matches!(f.simulation.integrator, Integrator::Implicit(_));
@@ -333,7 +335,7 @@ impl Setup {
         let (mut disc, report) =
             Discretization::from_tets(&rest, &volumes, &adjacency, horizon).map_err(physics)?;
         disc.set_materials(&ids).map_err(physics)?;
-        let from_energy = material::thresholds_from_energy(f, &mut materials, &disc);
+        let mut from_energy = material::thresholds_from_energy(f, &mut materials, &disc);
         times.families = stage.elapsed();
         let stage = Instant::now();
         let counted = estimate.with_bonds(report.bonds as u64, extra);
@@ -347,6 +349,9 @@ impl Setup {
                 .map_err(too_large)
         };
         let mut model = solver::model(&ctx, sim, disc, &mesh, &materials, &check_ghosts)?;
+        if let solver::AnyModel::Xu(xu) = &mut model {
+            from_energy = material::xu_thresholds_from_energy(f, xu);
+        }
         times.model = stage.elapsed();
         let correction = model.correction();
         let ghosts = model.ghosts();

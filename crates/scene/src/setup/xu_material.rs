@@ -8,7 +8,7 @@ use crate::error::SceneError;
 use crate::schema::{Energy, MaterialSpec, Moduli, XuKeys};
 
 use super::check::Ctx;
-use super::material::{axes, elasticity, fracture};
+use super::material::{axes, density, elasticity, fracture};
 
 /// The Xu material of `material[i]` with Xu's `keys`.
 pub(super) fn xu_material(
@@ -32,9 +32,9 @@ pub(super) fn xu_material(
     let (kappa, mu) = elasticity(ctx, i, m)?;
     let young = 9.0 * kappa * mu / (3.0 * kappa + mu);
     let poisson = (3.0 * kappa - 2.0 * mu) / (2.0 * (3.0 * kappa + mu));
-    let mut mat = XuMaterial::from_young_poisson(young, poisson, m.density, g, h, rule)
+    let mut mat = XuMaterial::from_young_poisson(young, poisson, density(ctx, i, m)?, g, h, rule)
         .map_err(|e| ctx.err(&key, e.to_string()))?;
-    mat.fracture = fracture(ctx, i, m, None)?;
+    mat.fracture = fracture(ctx, i, m)?;
     let frame = axes(ctx, i, m)?;
     if let Some(s) = m.anisotropy {
         for (k, &v) in s.iter().enumerate() {
