@@ -24,6 +24,9 @@ pub struct Damage {
     new_count: Vec<u32>,
     /// Largest `sw / threshold - 1` over the bonds the last check broke (0 when none broke).
     overshoot: f64,
+    /// Per particle, the largest `sw / threshold` its intact bonds reached at any check
+    /// (an upper bound with plastic extensions).
+    peak: Vec<f64>,
 }
 
 impl Damage {
@@ -64,6 +67,7 @@ impl Damage {
             threshold: vec![0.0; n],
             new_count: vec![0; n],
             overshoot: 0.0,
+            peak: vec![0.0; n],
         }
     }
 
@@ -87,10 +91,24 @@ impl Damage {
         &self.state
     }
 
-    /// Writes the bond states for a checkpoint (the per-particle counts follow from them).
+    /// Per particle, the largest share of its threshold, `sw / (s_crit (1 + alpha phi))`, that
+    /// any of its bonds reached at a check so far (1). A bond that broke reached 1 or more.
+    /// With plastic extensions the value is an upper bound.
+    pub fn peak_share(&self) -> &[f64] {
+        &self.peak
+    }
+
+    /// Whether particle `i` can break bonds (a finite `s_crit`).
+    pub fn can_break(&self, i: usize) -> bool {
+        self.s_crit[i].is_finite()
+    }
+
+    /// Writes the bond states and the peak shares for a checkpoint (the per-particle counts
+    /// follow from the states).
     pub(crate) fn save(&self, w: &mut Writer) {
         w.tag("damage");
         w.array(&self.state);
+        w.array(&self.peak);
     }
 
     /// Reads what [`Damage::save`] wrote and recounts the intact bonds of every particle.
@@ -101,6 +119,7 @@ impl Damage {
     ) -> Result<(), CheckpointError> {
         r.tag("damage")?;
         r.array_into("bond states", &mut self.state)?;
+        r.array_into("peak shares", &mut self.peak)?;
         if let Some(&b) = self.state.iter().find(|&&b| b > 1) {
             return Err(CheckpointError::Invalid {
                 what: "bond states".into(),
@@ -155,6 +174,7 @@ impl Damage {
             self.intact[i] = self.state[r].iter().map(|&b| u32::from(b)).sum();
         }
         self.overshoot = ext_damage.overshoot;
+        self.peak.copy_from_slice(&ext_damage.peak[..real.len()]);
     }
 
     /// Sets the overshoot to 0, as a check that broke nothing does.
@@ -186,10 +206,11 @@ impl Damage {
             threshold,
             new_count,
             overshoot: _,
+            peak,
         } = self;
         state.len()
             + (initial.len() + intact.len() + new_count.len()) * 4
-            + (s_crit.len() + alpha.len() + threshold.len()) * 8
+            + (s_crit.len() + alpha.len() + threshold.len() + peak.len()) * 8
     }
 
     /// Breaks bonds at positions `y` (m), horizon `delta` (m), plastic extensions `p` of which
@@ -213,19 +234,22 @@ impl Damage {
             let first = family.range(i).start;
             let yi = y[i];
             let mut count = 0;
+            // e - floor bounds e - ep from above
+            let mut most = 0.0f64;
             for k in family.range(i) {
                 if row[k - first] != 1 {
                     continue;
                 }
                 let j = family.neighbours()[k] as usize;
                 let e = norm(sub(y[j], yi)) - family.rest_lengths()[k];
+                most = most.max(e - floor);
                 // Bonds far from breaking skip the plastic extensions' loads.
                 if brk.near(e - floor) && brk.breaks(i, j, e, p.pair(k)) {
                     row[k - first] = 2;
                     count += 1;
                 }
             }
-            ((), count)
+            ((), count, most)
         });
         self.finish_check(family, y, delta, p, broken);
     }
@@ -233,7 +257,8 @@ impl Damage {
     /// The bond pass of a check, `visit`'s: for each particle `i`,
     /// `visit(i, row, bond_row, breaker)` walks `i`'s own bond states `row` (1 intact, 0
     /// broken), marks with 2 the intact bonds that [`Breaker::breaks`] says go now, and returns
-    /// what it computed for `i` (stored in `out.0[i]`) with the number it marked; `bond_row` is
+    /// what it computed for `i` (stored in `out.0[i]`) with the number it marked and an upper
+    /// bound (m) on its intact bonds' `e - ep` (for [`Damage::peak_share`]); `bond_row` is
     /// `i`'s slice of the per-bond `out.1`, the visitor's own. Since the criterion is symmetric
     /// both ends of a bond decide alike, so a force model can fuse the check into a bond loop of
     /// its own and skip the bonds it breaks there. [`Damage::finish_check`] must follow.
@@ -244,7 +269,7 @@ impl Damage {
         out: (&mut [T], &mut [B]),
         visit: &F,
     ) where
-        F: Fn(usize, &mut [u8], &mut [B], &Breaker) -> (T, u32) + Sync,
+        F: Fn(usize, &mut [u8], &mut [B], &Breaker) -> (T, u32, f64) + Sync,
     {
         {
             let (s_crit, alpha) = (&self.s_crit, &self.alpha);
@@ -266,22 +291,26 @@ impl Damage {
         };
         let offsets = family.offsets();
         let n = family.len();
-        let per_particle = (&mut self.new_count[..], out.0);
+        let inv_delta = 1.0 / delta;
+        let threshold = &self.threshold;
+        let per_particle = ((&mut self.new_count[..], &mut self.peak[..]), out.0);
         for_rows(
             offsets,
             n,
             per_particle,
             (&mut self.state[..], out.1),
             &|first,
-              (counts, outs): (&mut [u32], &mut [T]),
+              ((counts, peaks), outs): ((&mut [u32], &mut [f64]), &mut [T]),
               (state, bonds): (&mut [u8], &mut [B])| {
                 let base = offsets[first] as usize;
-                for (o, (count, slot)) in counts.iter_mut().zip(outs.iter_mut()).enumerate() {
+                let slots = counts.iter_mut().zip(peaks.iter_mut()).zip(outs.iter_mut());
+                for (o, ((count, peak), slot)) in slots.enumerate() {
                     let i = first + o;
                     let r = r_of(family, i, base);
-                    let (value, c) = visit(i, &mut state[r.clone()], &mut bonds[r], &brk);
+                    let (value, c, most) = visit(i, &mut state[r.clone()], &mut bonds[r], &brk);
                     *slot = value;
                     *count = c;
+                    *peak = peak.max(most * inv_delta / threshold[i]);
                 }
             },
         );

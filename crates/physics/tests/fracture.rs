@@ -317,3 +317,56 @@ fn ductile_check_matches_the_criterion_bond_by_bond() {
         }
     }
 }
+
+#[test]
+fn the_peak_share_is_the_largest_bond_stretch_over_its_threshold() {
+    // A uniform stretch eps gives bond k the extension eps r_k, so particle i's largest share
+    // is eps max_k r_k / (delta s_crit): below 1, nothing breaks. The fused check (Chen's
+    // force step) and the plain one (Xu's) read it alike; an unstretched step lowers nothing.
+    use perifrac_physics::{ForceModel, XuMaterial, XuModel, XuOptions};
+    let (disc, _, _) = block([0.06, 0.03, 0.03], [6, 3, 3], 1.5);
+    let x = disc.rest_positions().to_vec();
+    let (delta, s_crit, eps) = (disc.horizon(), 2e-3, 1e-3);
+    let fam = disc.family().clone();
+    let want: Vec<f64> = (0..x.len())
+        .map(|i| {
+            let r = fam
+                .range(i)
+                .map(|k| fam.rest_lengths()[k])
+                .fold(0.0, f64::max);
+            eps * r / (delta * s_crit)
+        })
+        .collect();
+    let y: Vec<[f64; 3]> = x.iter().map(|p| p.map(|c| c * (1.0 + eps))).collect();
+    let mut xu = steel_xu();
+    xu.fracture = Some(FractureParams { s_crit, alpha: 0.0 });
+    let models: Vec<Box<dyn ForceModel>> = vec![
+        Box::new(ChenModel::new(disc.clone(), &[brittle(s_crit, 0.0)]).unwrap()),
+        Box::new(XuModel::new(disc, &[xu], XuOptions::default()).unwrap()),
+    ];
+    for mut m in models {
+        let (mut broken, mut f) = (Vec::new(), vec![[0.0; 3]; x.len()]);
+        m.break_bonds_and_update_forces(&y, &mut broken, &mut f);
+        m.break_bonds_and_update_forces(&x, &mut broken, &mut f);
+        assert!(broken.is_empty());
+        let got = m.damage().unwrap().peak_share();
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            // the extension of a stretched bond rounds at about 1e-16 m in 1e-6 m
+            assert!((g / w - 1.0).abs() < 1e-9, "particle {i}: {g} against {w}");
+        }
+    }
+
+    /// Steel in Xu's model.
+    fn steel_xu() -> XuMaterial {
+        use perifrac_physics::{Curve, XuModuli};
+        XuMaterial::from_young_poisson(
+            200e9,
+            0.3,
+            7800.0,
+            Curve::NeoHookean,
+            Curve::NeoHookean,
+            XuModuli::Consistent,
+        )
+        .unwrap()
+    }
+}

@@ -252,6 +252,29 @@ impl Driver {
         }
     }
 
+    /// Per material, the largest share of its fracture threshold that any bond reached so far
+    /// (1; a bond that broke reached 1 or more), `None` for a material that cannot break; `None`
+    /// when nothing can break.
+    pub fn peak_threshold_shares(&self) -> Option<Vec<Option<f64>>> {
+        let model = self.solver.model();
+        let damage = model.damage()?;
+        let ids = model.discretization().materials();
+        let count = ids.iter().map(|&m| m as usize + 1).max().unwrap_or(0);
+        let mut out: Vec<Option<f64>> = vec![None; count];
+        for (i, (&m, &p)) in ids.iter().zip(damage.peak_share()).enumerate() {
+            if damage.can_break(i) {
+                let slot = &mut out[m as usize];
+                *slot = Some(slot.map_or(p, |q| q.max(p)));
+            }
+        }
+        Some(out)
+    }
+
+    /// Bonds (pairs) at the start.
+    pub fn bonds(&self) -> u64 {
+        self.solver.model().discretization().family().num_bonds() as u64 / 2
+    }
+
     /// Bonds (pairs) broken since the start.
     pub fn broken_bonds(&self) -> u64 {
         self.broken_bonds

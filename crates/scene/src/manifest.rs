@@ -169,6 +169,10 @@ pub struct SolidFrameJson {
     /// Runs with `[[load]]` tables: the work they have done so far (J).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub load_work: Option<f64>,
+    /// Runs that can break: per material, the largest share of its fracture threshold a bond
+    /// has reached so far (1; 1 or more once one broke), null for a material that cannot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_threshold_share: Option<Vec<Option<f64>>>,
 }
 
 /// A thin shell's frame counts in `run.json`.

@@ -177,6 +177,9 @@ pub(super) fn summary(s: &Summary, wall: f64, resumed_at: u64, threads: usize, d
 
 /// A tet solid's self contact, event search, implicit iterations and time per stage.
 fn solid_lines(s: &SolidSummary, steps: u64) {
+    if let Some(line) = why_little_broke(s) {
+        eprintln!("{line}");
+    }
     if let Some((builds, deepest)) = s.self_contact {
         eprintln!(
             "self contact: up to {} pairs touching, deepest overlap {:.3e} m ({:.1}% of a \
@@ -275,4 +278,38 @@ fn shell_lines(s: &ShellSummary, steps: u64, threads: usize) {
         s.physics_time.as_secs_f64(),
         s.output_time.as_secs_f64()
     );
+}
+
+/// The share of the bonds under which a run says how close its materials came to breaking.
+const FEW_BROKEN: f64 = 0.01;
+
+/// When fewer than [`FEW_BROKEN`] of the bonds broke in a run that can break: how close each
+/// breaking material came, as the largest share of its threshold a bond reached.
+fn why_little_broke(s: &SolidSummary) -> Option<String> {
+    let shares = s.peak_threshold_shares.as_ref()?;
+    if s.broken_bonds as f64 >= FEW_BROKEN * s.bonds as f64 {
+        return None;
+    }
+    let parts: Vec<String> = shares
+        .iter()
+        .enumerate()
+        .filter_map(|(m, p)| p.map(|p| format!("material {m} {:.0}%", 100.0 * p)))
+        .collect();
+    if parts.is_empty() {
+        return None;
+    }
+    let most = shares.iter().flatten().cloned().fold(0.0, f64::max);
+    let hint = if most < 1.0 {
+        "; to break, lower the threshold (fracture_energy or s_crit) or load harder"
+    } else {
+        ""
+    };
+    Some(format!(
+        "{} of {} bonds broke (under {:.0}%); the largest bond stretch reached, as a share of \
+         its threshold: {}{hint}",
+        s.broken_bonds,
+        s.bonds,
+        100.0 * FEW_BROKEN,
+        parts.join(", ")
+    ))
 }

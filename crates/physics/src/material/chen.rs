@@ -863,13 +863,15 @@ impl ChenModel {
         with_wd!(@w s, w, {
             if s.options.energy_consistent {
                 damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
-                    let ((theta, m), c) = dilatation_breaking::<_, true>(inp, w, lanes, brk, i, row);
-                    ([theta, m], c)
+                    let ((theta, m), c, most) =
+                        dilatation_breaking::<_, true>(inp, w, lanes, brk, i, row);
+                    ([theta, m], c, most)
                 })
             } else {
                 damage.visit_check(inp.family, delta, (ts, none), &|i, row, _, brk| {
-                    let ((theta, m), c) = dilatation_breaking::<_, false>(inp, w, lanes, brk, i, row);
-                    ([theta, m], c)
+                    let ((theta, m), c, most) =
+                        dilatation_breaking::<_, false>(inp, w, lanes, brk, i, row);
+                    ([theta, m], c, most)
                 })
             }
         });

@@ -288,7 +288,8 @@ fn dilatation_most<W: Weights, P: Plastic, D: Alive, const MOMENT: bool>(
 /// [`dilatation`] of an elastic particle fused with the damage check: walks `i`'s own bond
 /// states `row` (1 intact), marks with 2 the intact bonds `brk` breaks at `inp.y` and leaves
 /// them out of the sums, exactly as a check followed by [`dilatation`] would (the same terms in
-/// the same order). Returns `(theta_i, S_i)` and the number of bonds it marked.
+/// the same order). Returns `(theta_i, S_i)`, the number of bonds it marked and the greatest
+/// extension of its intact bonds (m).
 ///
 /// The first walk sums as if nothing broke and keeps the greatest extension: when that is not
 /// near breaking, no bond is (the test is monotone in the extension, also in floating point),
@@ -305,7 +306,7 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
     brk: &Breaker,
     i: usize,
     row: &mut [u8],
-) -> ((f64, f64), u32) {
+) -> ((f64, f64), u32, f64) {
     let fam = inp.family;
     let nb = fam.neighbours();
     let rl = fam.rest_lengths();
@@ -322,7 +323,7 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
         }
     };
     if !brk.near(most) {
-        return (sums, 0);
+        return (sums, 0, most);
     }
     let yi = inp.y[i];
     let (mut acc, mut u, mut m) = (0.0, 0.0, 0.0);
@@ -348,7 +349,7 @@ pub(crate) fn dilatation_breaking<W: Weights, const MOMENT: bool>(
         }
     }
     let theta = inp.c_theta[i] * acc;
-    ((theta, u - theta * m / 3.0), count)
+    ((theta, u - theta * m / 3.0), count, most)
 }
 
 /// Per-particle constants of the return map: `b_j`, `(Psi0_j, gamma_ratio_j)` and the
@@ -718,9 +719,9 @@ fn finish_yield<W: Weights>(
 /// [`dilatation_yield`] fused with the damage check: `row` is `i`'s own bond states (1 intact),
 /// the bonds `brk` breaks at `inp.y` with the pairs `ep` as they were (whose least value is
 /// `floor`) are marked 2 and left out, exactly as a check before [`dilatation_yield`] would.
-/// Returns what [`dilatation_yield`] does and the number of bonds it marked. As in
-/// [`dilatation_breaking`], a first walk sums as if nothing broke, and only a particle with a
-/// bond near breaking walks again with the check. `hint` as for [`dilatation_yield`].
+/// Returns what [`dilatation_yield`] does, the number of bonds it marked and an upper bound (m)
+/// on its intact bonds' `e - ep`. As in [`dilatation_breaking`], a first walk sums as if
+/// nothing broke, and only a particle with a bond near breaking walks again with the check. `hint` as for [`dilatation_yield`].
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn dilatation_yield_breaking<W: Weights>(
@@ -735,11 +736,11 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     ep: &mut [[f64; 2]],
     buf: &mut RowBuffer,
     lanes: Option<Row>,
-) -> ([f64; 4], u32) {
+) -> ([f64; 4], u32, f64) {
     if let Some((out, most)) = lanes_inside(inp, lanes, yp, i, hint, Some(row)) {
         // every pair is +0.0: the greatest elastic stretch is the greatest extension
         if !brk.near(most) {
-            return (out, 0);
+            return (out, 0, most);
         }
     }
     let fam = inp.family;
@@ -753,7 +754,7 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     // point (subtraction rounds monotonically)
     if !brk.near(most) {
         let out = finish_yield(inp, w, |k| mask.alive(k), yp, i, theta, sums, ep, buf);
-        return (out, 0);
+        return (out, 0, most);
     }
     let yi = inp.y[i];
     let rsum = yp.rsum(i);
@@ -786,7 +787,7 @@ pub(crate) fn dilatation_yield_breaking<W: Weights>(
     let alive = |k: usize| row[k - first] == 1;
     let sums = if hint.yielded { None } else { Some(sums) };
     let out = finish_yield(inp, w, alive, yp, i, theta, sums, ep, buf);
-    (out, count)
+    (out, count, most)
 }
 
 /// Bond `k`'s term of `theta_i / c_i` as [`dilatation`] sums it.

@@ -45,6 +45,11 @@ pub struct SolidSummary {
     pub self_contact: Option<(u64, perifrac_contact::SelfContactStats)>,
     /// The work the scene's `[[load]]` tables did (J), when it has some.
     pub load_work: Option<f64>,
+    /// Bonds (pairs) at the start.
+    pub bonds: u64,
+    /// Per material, the largest share of its fracture threshold a bond reached (1), `None`
+    /// for one that cannot break; `None` when nothing can.
+    pub peak_threshold_shares: Option<Vec<Option<f64>>>,
 }
 
 /// A tet solid being run.
@@ -196,6 +201,8 @@ impl Body for Solid {
                 .self_contact()
                 .map(|c| (c.rebuilds(), d.self_contact_deepest())),
             load_work: d.influences().get::<Loads>().map(Loads::work),
+            bonds: d.bonds(),
+            peak_threshold_shares: d.peak_threshold_shares(),
         })
     }
 }
@@ -328,6 +335,7 @@ impl Solid {
                     }
                 }),
                 load_work: driver.influences().get::<Loads>().map(Loads::work),
+                peak_threshold_share: driver.peak_threshold_shares(),
             }),
         })
     }
