@@ -5,7 +5,8 @@
 //! wall time, steps, bonds and error; [`stability`] runs hard cases and says whether each
 //! survived, stopped with a message or failed; [`speed`] times the force loop; [`contact`]
 //! measures contact between particles; [`look`] measures the cut surface (roughness, crack
-//! directions, fragment sizes, validity). Results come as
+//! directions, fragment sizes, validity); [`fracture`] runs the Kalthoff-Winkler impact against
+//! its experiment. Results come as
 //! [`Table`]s (Markdown) and [`Plot`]s (PNG through plotters). This crate is a harness: it uses
 //! the physics, fem, topology and scene crates and is used only by the command line.
 
@@ -19,6 +20,7 @@ mod error;
 pub mod events;
 mod facets;
 mod fit;
+pub mod fracture;
 pub mod look;
 mod plot;
 pub mod shells;

@@ -421,3 +421,24 @@ fn shell_egg_table_holds_every_run() {
     assert_eq!(nm.rows[0][2], "20");
     assert!(evals(&nm.rows[1]) >= 20);
 }
+
+#[test]
+fn kalthoff_winkler_cracks_leave_near_the_experiments_angle_below_the_rayleigh_speed() {
+    use perifrac_bench::fracture;
+    // 4 mm cells (Tiny). Measured 73.0 and 71.0 degrees (67.6 and 66.2 at 2 mm, BENCHMARKS.md)
+    // against the experiment's 70: 65 to 75 still fails a crack that runs on along its notch
+    // (0) or square to it (90). The plate is symmetric and its mesh is not: 2.0 degrees apart.
+    let cells = fracture::resolutions(Effort::Tiny)[0];
+    let run = fracture::kalthoff_winkler(cells, &mut |_| {}).unwrap();
+    let angles: Vec<f64> = run.angles.iter().map(|a| a.unwrap()).collect();
+    for a in &angles {
+        assert!((65.0..75.0).contains(a), "{angles:?}");
+    }
+    assert!((angles[0] - angles[1]).abs() < 4.0, "{angles:?}");
+    // a crack tip never outruns the Rayleigh speed (measured 0.86 of it here)
+    let fastest = run.fastest_tip();
+    assert!(fastest > 0.0 && fastest < run.rayleigh, "{fastest} m/s");
+    let (table, facets) = fracture::report(&[run]);
+    assert_eq!(table.rows.len(), 1);
+    assert_eq!(facets.panels.len(), 1);
+}
