@@ -1,7 +1,8 @@
 //! Dynamic fracture against experiment: the Kalthoff-Winkler impact
-//! (`data/scenes/kalthoff_winkler.toml`) at three resolutions. Each run gives the angle at which
-//! the cracks leave the notch tips, the crack tips' speed against the Rayleigh speed, and the
-//! damage at the end as a picture.
+//! (`data/scenes/kalthoff_winkler.toml`) at three resolutions, and crack branching in a glass
+//! plate under tractions (`data/scenes/glass_branching.toml`) at three loads. Each run gives its
+//! crack's angle or branching, the crack tips' speed against the Rayleigh speed, and the damage
+//! at the end as a picture.
 
 use std::path::Path;
 use std::time::Instant;
@@ -129,19 +130,33 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// The plate at `cells`, run to its end.
-pub fn kalthoff_winkler(
-    cells: [usize; 3],
+/// What a run gives its measures: the particles' rest positions (m), the wall time of the steps
+/// (s), the steps and the damage at the end.
+struct Looked {
+    rest: Vec<[f64; 3]>,
+    wall: f64,
+    steps: u64,
+    particles: usize,
+    damage: Vec<f64>,
+}
+
+/// A measure taken during a run: `look(time s, rest positions m, damage)`.
+type Look<'a> = dyn FnMut(f64, &[[f64; 3]], &[f64]) + 'a;
+
+/// Sets up `text` (the scene file `name`) and runs it to its end, calling `look(time s, rest,
+/// damage)` every [`LOOK_EVERY`] of simulated time and at the end.
+fn run_looking(
+    case: &str,
+    name: &str,
+    text: &str,
     progress: &mut dyn FnMut(&str),
-) -> Result<KwRun, BenchError> {
-    let case = format!("Kalthoff-Winkler {}x{}x{}", cells[0], cells[1], cells[2]);
+    look: &mut Look,
+) -> Result<Looked, BenchError> {
     let scene_error = |e: &dyn std::fmt::Display| BenchError::Scene {
-        case: case.clone(),
+        case: case.into(),
         message: e.to_string(),
     };
-    let text = KW.replace("cells = [100, 50, 5]", &format!("cells = {cells:?}"));
-    let scene =
-        Scene::parse(&text, Path::new("kalthoff_winkler.toml")).map_err(|e| scene_error(&e))?;
+    let scene = Scene::parse(text, Path::new(name)).map_err(|e| scene_error(&e))?;
     let mut setup = Setup::new(&scene, None).map_err(|e| scene_error(&e))?;
     progress(&format!(
         "fracture: {case}, {} particles",
@@ -157,24 +172,42 @@ pub fn kalthoff_winkler(
         .discretization()
         .rest_positions()
         .to_vec();
-    let mut tips: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
-    let mut angles = [None; 2];
     let started = Instant::now();
     let mut done = 0;
     while done < total {
         let n = every.min(total - done);
         for _ in 0..n {
             setup.driver.step().map_err(|cause| BenchError::Physics {
-                case: case.clone(),
+                case: case.into(),
                 cause,
             })?;
         }
         done += n;
-        let damage = setup.driver.damage();
+        look(done as f64 * dt, &rest, &setup.driver.damage());
+    }
+    Ok(Looked {
+        wall: started.elapsed().as_secs_f64(),
+        steps: done,
+        particles: setup.info.particles,
+        damage: setup.driver.damage(),
+        rest,
+    })
+}
+
+/// The plate at `cells`, run to its end.
+pub fn kalthoff_winkler(
+    cells: [usize; 3],
+    progress: &mut dyn FnMut(&str),
+) -> Result<KwRun, BenchError> {
+    let case = format!("Kalthoff-Winkler {}x{}x{}", cells[0], cells[1], cells[2]);
+    let text = KW.replace("cells = [100, 50, 5]", &format!("cells = {cells:?}"));
+    let mut tips: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
+    let mut angles = [None; 2];
+    let mut look = |time: f64, rest: &[[f64; 3]], damage: &[f64]| {
         for (k, &(tip, side)) in TIPS.iter().enumerate() {
-            let points = crack_points(&rest, &damage, tip, side);
+            let points = crack_points(rest, damage, tip, side);
             let reach = points.iter().map(|p| p.0).fold(0.0, f64::max);
-            tips[k].push((done as f64 * dt, reach));
+            tips[k].push((time, reach));
             if angles[k].is_none() && reach >= ANGLE_RANGE.1 {
                 let inside = points
                     .iter()
@@ -184,33 +217,38 @@ pub fn kalthoff_winkler(
                 angles[k] = Some(median(inside)).filter(|a| a.is_finite());
             }
         }
-    }
-    let wall = started.elapsed().as_secs_f64();
-    let damage = setup.driver.damage();
-    let back_edge = rest
+    };
+    let run = run_looking(&case, "kalthoff_winkler.toml", &text, progress, &mut look)?;
+    let back_edge = run
+        .rest
         .iter()
-        .zip(&damage)
+        .zip(&run.damage)
         .filter(|(x, &d)| d >= ON_A_CRACK && x[1] < 0.005 && x[0] > 0.075 && x[0] < 0.125)
         .count();
     let cell = 0.2 / cells[0] as f64;
     Ok(KwRun {
         cells,
         cell,
-        particles: setup.info.particles,
-        wall,
-        steps: done,
+        particles: run.particles,
+        wall: run.wall,
+        steps: run.steps,
         angles,
         tips,
         rayleigh: rayleigh_speed(190e9, 0.3, 8000.0),
         back_edge,
-        panel: damage_panel(&rest, &damage, cell, format!("{:.2} mm cells", cell * 1e3)),
+        panel: damage_panel(
+            &run.rest,
+            &run.damage,
+            cell,
+            format!("{:.2} mm cells", cell * 1e3),
+        ),
     })
 }
 
-/// The particles in the plate's top half (z) as triangles of side `cell / 2` (m, drawn in mm)
+/// The particles in the plate's top half (z, or all of a plate one particle thick) as triangles of side `cell / 2` (m, drawn in mm)
 /// at their rest positions, valued by damage.
 fn damage_panel(rest: &[[f64; 3]], damage: &[f64], cell: f64, caption: String) -> Panel {
-    let z_mid = 0.0045;
+    let z_mid = rest.iter().map(|p| p[2]).fold(0.0, f64::max) / 2.0;
     let s = 0.5 * cell * 1e3;
     let mut triangles = Vec::new();
     let mut values = Vec::new();
@@ -235,6 +273,210 @@ pub fn resolutions(effort: Effort) -> Vec<[usize; 3]> {
         Effort::Tiny => vec![[50, 25, 3]],
         Effort::Full => vec![[50, 25, 3], [75, 38, 4], [100, 50, 5]],
     }
+}
+
+/// The branching plate, whose cells and tractions the runs change.
+const BRANCHING: &str = include_str!("../../../data/scenes/glass_branching.toml");
+
+/// The tip of the branching plate's pre-crack (m).
+pub const PRECRACK_TIP: [f64; 2] = [0.05, 0.02];
+
+/// The layer along each long edge that the traction loads as a body force (m): the scene's.
+const LOAD_LAYER: f64 = 0.003;
+
+/// Damage this close to a loaded edge (m) is the load's, not the crack's.
+const EDGE_BAND: f64 = 0.003;
+
+/// Width of the columns across which [`crack_count`] counts cracks (m).
+pub const COLUMN: f64 = 0.002;
+
+/// Two damaged particles of a column further apart than this (m) across the plate lie on two
+/// cracks: a crack's damaged band is about two horizons wide.
+const CRACK_GAP: f64 = 0.004;
+
+/// One run of the branching plate.
+#[derive(Debug, Clone)]
+pub struct BranchingRun {
+    /// The traction on the long edges (Pa).
+    pub traction: f64,
+    /// Cells along x, y and z.
+    pub cells: [usize; 3],
+    /// Particles.
+    pub particles: usize,
+    /// Wall time of the steps (s).
+    pub wall: f64,
+    /// Where the crack first runs as two (m along x), `None` when it never does.
+    pub first_branch: Option<f64>,
+    /// Cracks that reach the plate's far edge (the last 5 mm).
+    pub at_far_edge: usize,
+    /// `(time s, distance m)` of the damage farthest from the pre-crack's tip.
+    pub tip: Vec<(f64, f64)>,
+    /// The Rayleigh speed of the glass (m/s).
+    pub rayleigh: f64,
+    /// The damage at the end.
+    pub panel: Panel,
+}
+
+impl BranchingRun {
+    /// The fastest crack-tip speed (m/s), fitted as [`KwRun::fastest_tip`] fits it.
+    pub fn fastest_tip(&self) -> f64 {
+        self.tip
+            .windows(SPEED_WINDOW)
+            .map(slope)
+            .fold(0.0, f64::max)
+    }
+
+    /// The mean speed (m/s) of the tip while it runs: fitted over the looks at which it is
+    /// 5 to 45 mm from the pre-crack's tip (the far edge is 50 mm away).
+    pub fn running_speed(&self) -> f64 {
+        let running: Vec<(f64, f64)> = self
+            .tip
+            .iter()
+            .copied()
+            .filter(|&(_, r)| (0.005..=0.045).contains(&r))
+            .collect();
+        slope(&running)
+    }
+}
+
+/// The cracks across the column of the plate `[x, x + COLUMN)`: clusters of damaged particles'
+/// y, away from the loaded edges, split where two are [`CRACK_GAP`] apart.
+fn crack_count(rest: &[[f64; 3]], damage: &[f64], x: f64, height: f64) -> usize {
+    let mut ys: Vec<f64> = rest
+        .iter()
+        .zip(damage)
+        .filter(|(p, &d)| {
+            d >= ON_A_CRACK
+                && p[0] >= x
+                && p[0] < x + COLUMN
+                && p[1] > EDGE_BAND
+                && p[1] < height - EDGE_BAND
+        })
+        .map(|(p, _)| p[1])
+        .collect();
+    if ys.is_empty() {
+        return 0;
+    }
+    ys.sort_by(f64::total_cmp);
+    1 + ys.windows(2).filter(|w| w[1] - w[0] > CRACK_GAP).count()
+}
+
+/// The branching plate at `cells` under `traction` (Pa) on its long edges, run to its end.
+pub fn branching(
+    cells: [usize; 3],
+    traction: f64,
+    progress: &mut dyn FnMut(&str),
+) -> Result<BranchingRun, BenchError> {
+    let case = format!(
+        "branching at {:.0} MPa, {}x{}x{}",
+        traction / 1e6,
+        cells[0],
+        cells[1],
+        cells[2]
+    );
+    let text = BRANCHING
+        .replace("cells = [100, 40, 2]", &format!("cells = {cells:?}"))
+        .replace("-1.3333333333e9", &format!("{:e}", -traction / LOAD_LAYER))
+        .replace("1.3333333333e9", &format!("{:e}", traction / LOAD_LAYER));
+    let (length, height) = (0.1, 0.04);
+    let mut tip = Vec::new();
+    let mut look = |time: f64, rest: &[[f64; 3]], damage: &[f64]| {
+        let reach = rest
+            .iter()
+            .zip(damage)
+            .filter(|(p, &d)| {
+                d >= ON_A_CRACK
+                    && p[0] > PRECRACK_TIP[0]
+                    && p[1] > EDGE_BAND
+                    && p[1] < height - EDGE_BAND
+            })
+            .map(|(p, _)| (p[0] - PRECRACK_TIP[0]).hypot(p[1] - PRECRACK_TIP[1]))
+            .fold(0.0, f64::max);
+        tip.push((time, reach));
+    };
+    let run = run_looking(&case, "glass_branching.toml", &text, progress, &mut look)?;
+    let (rest, damage) = (&run.rest, &run.damage);
+    // the first column past the pre-crack's tip from which the crack runs as two for three
+    // columns running
+    let columns = ((length - PRECRACK_TIP[0]) / COLUMN) as usize;
+    let counts: Vec<usize> = (0..columns)
+        .map(|c| crack_count(rest, damage, PRECRACK_TIP[0] + c as f64 * COLUMN, height))
+        .collect();
+    let first_branch = counts
+        .windows(3)
+        .position(|w| w.iter().all(|&n| n >= 2))
+        .map(|c| PRECRACK_TIP[0] + c as f64 * COLUMN);
+    let at_far_edge = (0..(0.005 / COLUMN) as usize)
+        .map(|c| crack_count(rest, damage, length - 0.005 + c as f64 * COLUMN, height))
+        .max()
+        .unwrap_or(0);
+    let cell = length / cells[0] as f64;
+    Ok(BranchingRun {
+        traction,
+        cells,
+        particles: run.particles,
+        wall: run.wall,
+        first_branch,
+        at_far_edge,
+        tip,
+        rayleigh: rayleigh_speed(72e9, 0.22, 2440.0),
+        panel: damage_panel(
+            rest,
+            damage,
+            cell,
+            format!("{:.0} MPa, {:.2} mm cells", traction / 1e6, cell * 1e3),
+        ),
+    })
+}
+
+/// The tractions (Pa) of a branching report: 2, 4 and 12 MPa at 1 mm cells (4 MPa alone for a
+/// quick run: at 2 mm cells the damage front jumps ahead of the crack by a horizon).
+pub fn branching_cases(effort: Effort) -> Vec<([usize; 3], f64)> {
+    match effort {
+        Effort::Tiny => vec![([100, 40, 2], 4e6)],
+        Effort::Full => vec![
+            ([100, 40, 2], 2e6),
+            ([100, 40, 2], 4e6),
+            ([100, 40, 2], 12e6),
+        ],
+    }
+}
+
+/// The branching report's table and picture.
+pub fn branching_report(runs: &[BranchingRun]) -> (Table, Facets) {
+    let mut table = Table::new(&[
+        "traction (MPa)",
+        "cell (mm)",
+        "particles",
+        "wall (s)",
+        "first branch (x, mm)",
+        "cracks at the far edge",
+        "fastest tip (m/s)",
+        "over Rayleigh",
+        "mean while running (m/s)",
+    ]);
+    for r in runs {
+        let fastest = r.fastest_tip();
+        table.push(vec![
+            format!("{:.0}", r.traction / 1e6),
+            format!("{:.2}", 100.0 / r.cells[0] as f64),
+            r.particles.to_string(),
+            format!("{:.1}", r.wall),
+            r.first_branch
+                .map_or("none".to_string(), |x| format!("{:.0}", x * 1e3)),
+            r.at_far_edge.to_string(),
+            format!("{fastest:.0}"),
+            format!("{:.2}", fastest / r.rayleigh),
+            format!("{:.0}", r.running_speed()),
+        ]);
+    }
+    let facets = Facets {
+        title: "Glass branching: damage at 46 us (mm)".into(),
+        scale: ("damage".into(), 0.6),
+        panels: runs.iter().map(|r| r.panel.clone()).collect(),
+        rows: 1,
+    };
+    (table, facets)
 }
 
 /// The report's table and picture of `runs`.

@@ -45,7 +45,8 @@ pub enum Which {
     /// shell model's speed (its accuracy is in `accuracy`, the `shell_*` cases).
     Shells(Common),
     /// Dynamic fracture against experiment: the Kalthoff-Winkler impact at three resolutions
-    /// (crack angles, crack-tip speeds against the Rayleigh speed, damage pictures).
+    /// and a glass plate's crack branching at three tractions (crack angles, branching,
+    /// crack-tip speeds against the Rayleigh speed, damage pictures).
     Fracture(Common),
     /// The cut surface: a split bar's crack roughness, the default wall's crack directions and
     /// fragment sizes at three resolutions, every piece checked closed and right side out.
@@ -266,6 +267,24 @@ fn fracture_report(c: &Common) -> Result<()> {
         Ok(()) => {
             md.push_str("\n![Kalthoff-Winkler: damage at the end](fracture_kalthoff_winkler.png)\n")
         }
+        Err(e) => eprintln!("note: {e}; the table is written without its picture"),
+    }
+    report.write("fracture", &md)?;
+    let mut branching = Vec::new();
+    for (cells, traction) in fracture::branching_cases(effort(c)) {
+        branching.push(fracture::branching(cells, traction, &mut progress)?);
+    }
+    let (table, facets) = fracture::branching_report(&branching);
+    md.push_str("\n## Crack branching in glass under tractions\n\n");
+    md.push_str(&format!(
+        "A crack runs as two where a column {:.0} mm wide holds two cracks for three columns \
+         running. The Rayleigh speed is {:.0} m/s.\n\n",
+        1e3 * fracture::COLUMN,
+        branching.first().map_or(0.0, |r| r.rayleigh),
+    ));
+    md.push_str(&table.to_markdown());
+    match facets.write_png(&c.output.join("fracture_branching.png")) {
+        Ok(()) => md.push_str("\n![Glass branching: damage at the end](fracture_branching.png)\n"),
         Err(e) => eprintln!("note: {e}; the table is written without its picture"),
     }
     report.write("fracture", &md)?;
