@@ -245,6 +245,17 @@ pub fn kalthoff_winkler(
     })
 }
 
+/// `panels` of damage in one row under `title`, on one scale from 0 to 0.6 (a particle on a
+/// crack has about half its bonds).
+fn damage_facets(title: &str, panels: Vec<Panel>) -> Facets {
+    Facets {
+        title: title.into(),
+        scale: ("damage".into(), 0.6),
+        panels,
+        rows: 1,
+    }
+}
+
 /// The particles in the plate's top half (z, or all of a plate one particle thick) as triangles of side `cell / 2` (m, drawn in mm)
 /// at their rest positions, valued by damage.
 fn damage_panel(rest: &[[f64; 3]], damage: &[f64], cell: f64, caption: String) -> Panel {
@@ -470,13 +481,11 @@ pub fn branching_report(runs: &[BranchingRun]) -> (Table, Facets) {
             format!("{:.0}", r.running_speed()),
         ]);
     }
-    let facets = Facets {
-        title: "Glass branching: damage at 46 us (mm)".into(),
-        scale: ("damage".into(), 0.6),
-        panels: runs.iter().map(|r| r.panel.clone()).collect(),
-        rows: 1,
-    };
-    (table, facets)
+    let panels = runs.iter().map(|r| r.panel.clone()).collect();
+    (
+        table,
+        damage_facets("Glass branching: damage at 46 us (mm)", panels),
+    )
 }
 
 /// The report's table and picture of `runs`.
@@ -507,13 +516,11 @@ pub fn report(runs: &[KwRun]) -> (Table, Facets) {
             r.back_edge.to_string(),
         ]);
     }
-    let facets = Facets {
-        title: "Kalthoff-Winkler: damage at 90 us (mm)".into(),
-        scale: ("damage".into(), 0.6),
-        panels: runs.iter().map(|r| r.panel.clone()).collect(),
-        rows: 1,
-    };
-    (table, facets)
+    let panels = runs.iter().map(|r| r.panel.clone()).collect();
+    (
+        table,
+        damage_facets("Kalthoff-Winkler: damage at 90 us (mm)", panels),
+    )
 }
 
 #[cfg(test)]

@@ -196,24 +196,25 @@ fn integral(bonds: &[Bond], delta: f64, kappa: f64, mu: f64, calibrated: bool) -
 /// one side crosses it when it reaches past `z`.
 pub(crate) fn plane_integral(bonds: &[Bond], energy: impl Fn(f64, f64) -> f64) -> f64 {
     let mut total = 0.0;
-    let mut side: Vec<Bond> = Vec::with_capacity(bonds.len());
+    // per bond on one side: its projection on the normal and its two terms
+    let mut side: Vec<(f64, f64, f64)> = Vec::with_capacity(bonds.len());
     for axis in 0..3 {
         for sign in [1.0, -1.0] {
             side.clear();
             side.extend(
                 bonds
                     .iter()
-                    .map(|&(x, a, b)| ([sign * x[axis], 0.0, 0.0], a, b))
-                    .filter(|&(p, _, _)| p[0] > 0.0),
+                    .map(|&(x, a, b)| (sign * x[axis], a, b))
+                    .filter(|&(p, _, _)| p > 0.0),
             );
-            side.sort_by(|a, b| a.0[0].total_cmp(&b.0[0]));
+            side.sort_by(|a, b| a.0.total_cmp(&b.0));
             let (mut a, mut b) = side
                 .iter()
                 .fold((0.0, 0.0), |(a, b), &(_, ta, tb)| (a + ta, b + tb));
             let mut from = 0.0;
             for &(p, ta, tb) in &side {
-                total += (p[0] - from) * energy(a, b);
-                from = p[0];
+                total += (p - from) * energy(a, b);
+                from = p;
                 a -= ta;
                 b -= tb;
             }
