@@ -60,6 +60,8 @@ pub struct KwRun {
     pub back_edge: usize,
     /// The damage at the end: the particles of the top layer as small triangles.
     pub panel: Panel,
+    /// The crack at the end: the rest `(x, y)` (m) of every particle on it.
+    pub cracks: Vec<[f64; 2]>,
 }
 
 /// Looks a crack-tip speed is fitted over: a tip advances by whole particles, about a cell
@@ -128,6 +130,41 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
+}
+
+/// The rest `(x, y)` (m) of the particles on a crack (damage at least [`ON_A_CRACK`]) that
+/// `keep` keeps.
+fn crack_points_xy(
+    rest: &[[f64; 3]],
+    damage: &[f64],
+    keep: impl Fn(&[f64; 3]) -> bool,
+) -> Vec<[f64; 2]> {
+    rest.iter()
+        .zip(damage)
+        .filter(|(p, &d)| d >= ON_A_CRACK && keep(p))
+        .map(|(p, _)| [p[0], p[1]])
+        .collect()
+}
+
+/// The distance (m) between two crack patterns: the mean distance from a point of one to the
+/// nearest point of the other, averaged both ways (0 for the same points; infinity when one is
+/// empty and the other not).
+pub fn path_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
+    let one_way = |a: &[[f64; 2]], b: &[[f64; 2]]| {
+        a.iter()
+            .map(|p| {
+                b.iter()
+                    .map(|q| (p[0] - q[0]).hypot(p[1] - q[1]))
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .sum::<f64>()
+            / a.len() as f64
+    };
+    match (a.is_empty(), b.is_empty()) {
+        (true, true) => 0.0,
+        (true, false) | (false, true) => f64::INFINITY,
+        _ => 0.5 * (one_way(a, b) + one_way(b, a)),
+    }
 }
 
 /// What a run gives its measures: the particles' rest positions (m), the wall time of the steps
@@ -236,6 +273,7 @@ pub fn kalthoff_winkler(
         tips,
         rayleigh: rayleigh_speed(190e9, 0.3, 8000.0),
         back_edge,
+        cracks: crack_points_xy(&run.rest, &run.damage, |_| true),
         panel: damage_panel(
             &run.rest,
             &run.damage,
@@ -245,14 +283,14 @@ pub fn kalthoff_winkler(
     })
 }
 
-/// `panels` of damage in one row under `title`, on one scale from 0 to 0.6 (a particle on a
-/// crack has about half its bonds).
+/// `panels` of damage under `title`, three to a row, on one scale from 0 to 0.6 (a particle on
+/// a crack has about half its bonds).
 fn damage_facets(title: &str, panels: Vec<Panel>) -> Facets {
     Facets {
         title: title.into(),
         scale: ("damage".into(), 0.6),
+        rows: panels.len().div_ceil(3).max(1),
         panels,
-        rows: 1,
     }
 }
 
@@ -326,6 +364,9 @@ pub struct BranchingRun {
     pub rayleigh: f64,
     /// The damage at the end.
     pub panel: Panel,
+    /// The cracks at the end, away from the loaded edges: the rest `(x, y)` (m) of every
+    /// particle on one.
+    pub cracks: Vec<[f64; 2]>,
 }
 
 impl BranchingRun {
@@ -431,6 +472,9 @@ pub fn branching(
         at_far_edge,
         tip,
         rayleigh: rayleigh_speed(72e9, 0.22, 2440.0),
+        cracks: crack_points_xy(rest, damage, |p| {
+            p[1] > EDGE_BAND && p[1] < height - EDGE_BAND
+        }),
         panel: damage_panel(
             rest,
             damage,
@@ -440,14 +484,19 @@ pub fn branching(
     })
 }
 
-/// The tractions (Pa) of a branching report: 2, 4 and 12 MPa at 1 mm cells (4 MPa alone for a
-/// quick run: at 2 mm cells the damage front jumps ahead of the crack by a horizon).
+/// The tractions (Pa) of a branching report: 2, 4 and 12 MPa at 1 mm cells, and 2 and 4 MPa at
+/// 1.33 and 0.67 mm for convergence (4 MPa at 1 mm alone for a quick run: at 2 mm cells the
+/// damage front jumps ahead of the crack by a horizon).
 pub fn branching_cases(effort: Effort) -> Vec<([usize; 3], f64)> {
     match effort {
         Effort::Tiny => vec![([100, 40, 2], 4e6)],
         Effort::Full => vec![
+            ([75, 30, 2], 2e6),
             ([100, 40, 2], 2e6),
+            ([150, 60, 3], 2e6),
+            ([75, 30, 2], 4e6),
             ([100, 40, 2], 4e6),
+            ([150, 60, 3], 4e6),
             ([100, 40, 2], 12e6),
         ],
     }
@@ -465,9 +514,14 @@ pub fn branching_report(runs: &[BranchingRun]) -> (Table, Facets) {
         "fastest tip (m/s)",
         "over Rayleigh",
         "mean while running (m/s)",
+        "crack path to the finest (mm)",
     ]);
     for r in runs {
         let fastest = r.fastest_tip();
+        let finest = runs
+            .iter()
+            .filter(|f| f.traction == r.traction)
+            .max_by_key(|f| f.particles);
         table.push(vec![
             format!("{:.0}", r.traction / 1e6),
             format!("{:.2}", 100.0 / r.cells[0] as f64),
@@ -479,6 +533,9 @@ pub fn branching_report(runs: &[BranchingRun]) -> (Table, Facets) {
             format!("{fastest:.0}"),
             format!("{:.2}", fastest / r.rayleigh),
             format!("{:.0}", r.running_speed()),
+            finest.map_or("-".to_string(), |f| {
+                format!("{:.2}", 1e3 * path_distance(&r.cracks, &f.cracks))
+            }),
         ]);
     }
     let panels = runs.iter().map(|r| r.panel.clone()).collect();
@@ -500,8 +557,10 @@ pub fn report(runs: &[KwRun]) -> (Table, Facets) {
         "fastest tip (m/s)",
         "over Rayleigh",
         "back-edge particles",
+        "crack path to the finest (mm)",
     ]);
     let show = |a: Option<f64>| a.map_or("-".to_string(), |a| format!("{a:.1}"));
+    let finest = runs.iter().max_by_key(|r| r.particles);
     for r in runs {
         let fastest = r.fastest_tip();
         table.push(vec![
@@ -514,6 +573,9 @@ pub fn report(runs: &[KwRun]) -> (Table, Facets) {
             format!("{fastest:.0}"),
             format!("{:.2}", fastest / r.rayleigh),
             r.back_edge.to_string(),
+            finest.map_or("-".to_string(), |f| {
+                format!("{:.2}", 1e3 * path_distance(&r.cracks, &f.cracks))
+            }),
         ]);
     }
     let panels = runs.iter().map(|r| r.panel.clone()).collect();
@@ -526,6 +588,21 @@ pub fn report(runs: &[KwRun]) -> (Table, Facets) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn path_distance_is_the_mean_gap_both_ways() {
+        // a line of points and the same line 1 mm off: 1 mm both ways
+        let a: Vec<[f64; 2]> = (0..10).map(|i| [i as f64 * 1e-3, 0.0]).collect();
+        let b: Vec<[f64; 2]> = a.iter().map(|p| [p[0], 1e-3]).collect();
+        assert!((path_distance(&a, &b) - 1e-3).abs() < 1e-15);
+        assert_eq!(path_distance(&a, &a), 0.0);
+        // a branch one run lacks counts on its side only
+        let mut c = a.clone();
+        c.push([5e-3, 4e-3]);
+        let d = path_distance(&c, &a);
+        assert!((d - 0.5 * 4e-3 / 11.0).abs() < 1e-15, "{d}");
+        assert!(path_distance(&a, &[]).is_infinite());
+    }
 
     #[test]
     fn the_rayleigh_speed_is_viktorovs() {

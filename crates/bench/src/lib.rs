@@ -23,6 +23,7 @@ mod fit;
 pub mod fracture;
 pub mod look;
 mod plot;
+pub mod preview;
 pub mod shells;
 pub mod speed;
 pub mod stability;

@@ -462,3 +462,36 @@ fn the_glass_plate_crack_branches_below_the_rayleigh_speed() {
     assert_eq!(table.rows.len(), 1);
     assert_eq!(facets.panels.len(), 1);
 }
+
+#[test]
+fn a_matching_fracture_energy_breaks_the_preview_wall_as_its_s_crit() {
+    use perifrac_bench::preview;
+    // The quick study is the wall at 16 cells: the fracture energy found for it gives the
+    // same s_crit to rounding (measured 5.0000e-4 both), so the same fragments. Measured: 12
+    // fragments over 1% of the mass, a damaged zone 214 mm in radius.
+    let scenes = preview::scenes(Effort::Tiny);
+    let wall = &scenes[0];
+    let resolution = &wall.resolutions[0];
+    let energy = wall.matching_energy(resolution).unwrap();
+    let by_strain = wall
+        .run(resolution, &wall.s_crit_line(), &mut |_| {})
+        .unwrap();
+    let by_energy = wall
+        .run(
+            resolution,
+            &format!("fracture_energy = {energy:e}"),
+            &mut |_| {},
+        )
+        .unwrap();
+    assert!((by_energy.s_crit / by_strain.s_crit - 1.0).abs() < 1e-9);
+    assert!(by_strain.shares.len() >= 5, "{:?}", by_strain.shares);
+    assert_eq!(by_strain.shares, by_energy.shares);
+    assert!(
+        by_strain.radius > 0.1 && by_strain.radius < 0.3,
+        "{}",
+        by_strain.radius
+    );
+    let (table, spread) = preview::report(&[by_strain, by_energy]);
+    assert_eq!(table.rows.len(), 2);
+    assert_eq!(spread.rows.len(), 2);
+}

@@ -8,8 +8,9 @@ pub const MAGIC: &[u8; 8] = b"PFCKPT\r\n";
 
 /// The layout version this build writes and reads; a file of another version is refused.
 /// 2: the driver's self-contact counters; 3: its contact time; 4: its fragment ids; 5: a
-/// shell's Newmark state; 6: a ghost layer's dropped ghosts.
-pub const FORMAT_VERSION: u32 = 7;
+/// shell's Newmark state; 6: a ghost layer's dropped ghosts; 7: the damage check's peak
+/// shares; 8: the work of a shell's loads.
+pub const FORMAT_VERSION: u32 = 8;
 
 /// What a checkpoint says about itself.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -48,6 +48,10 @@ pub enum Which {
     /// and a glass plate's crack branching at three tractions (crack angles, branching,
     /// crack-tip speeds against the Rayleigh speed, damage pictures).
     Fracture(Common),
+    /// Preview and final alike: the default wall and the bunny drop at three resolutions, with
+    /// `s_crit` and with `fracture_energy` (fragments over 1% of the mass, their shares, the
+    /// damaged zone's radius).
+    Preview(Common),
     /// The cut surface: a split bar's crack roughness, the default wall's crack directions and
     /// fragment sizes at three resolutions, every piece checked closed and right side out.
     Look(Common),
@@ -75,6 +79,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         Which::Look(c) => look_report(c),
         Which::Shells(c) => shells_report(c),
         Which::Fracture(c) => fracture_report(c),
+        Which::Preview(c) => preview_report(c),
     }
 }
 
@@ -245,8 +250,8 @@ fn fracture_report(c: &Common) -> Result<()> {
         runs.push(fracture::kalthoff_winkler(cells, &mut progress)?);
     }
     let (table, facets) = fracture::report(&runs);
-    let mut md = report.header("fracture");
-    md.push_str(
+    // the header is written again at the end, with the whole run's time
+    let mut md = String::from(
         "## Kalthoff-Winkler: crack angles and speeds
 \n",
     );
@@ -269,7 +274,7 @@ fn fracture_report(c: &Common) -> Result<()> {
         }
         Err(e) => eprintln!("note: {e}; the table is written without its picture"),
     }
-    report.write("fracture", &md)?;
+    report.write("fracture", &(report.header("fracture") + &md))?;
     let mut branching = Vec::new();
     for (cells, traction) in fracture::branching_cases(effort(c)) {
         branching.push(fracture::branching(cells, traction, &mut progress)?);
@@ -287,7 +292,42 @@ fn fracture_report(c: &Common) -> Result<()> {
         Ok(()) => md.push_str("\n![Glass branching: damage at the end](fracture_branching.png)\n"),
         Err(e) => eprintln!("note: {e}; the table is written without its picture"),
     }
-    report.write("fracture", &md)?;
+    report.write("fracture", &(report.header("fracture") + &md))?;
+    Ok(())
+}
+
+fn preview_report(c: &Common) -> Result<()> {
+    use perifrac_bench::preview;
+    let report = Report::start(c)?;
+    let mut progress = report.progress();
+    let mut runs = Vec::new();
+    for scene in preview::scenes(effort(c)) {
+        let middle = &scene.resolutions[scene.resolutions.len() / 2];
+        let energy = scene.matching_energy(middle)?;
+        for k in [scene.s_crit_line(), format!("fracture_energy = {energy:e}")] {
+            for resolution in &scene.resolutions {
+                runs.push(scene.run(resolution, &k, &mut progress)?);
+                let (table, spread) = preview::report(&runs);
+                let mut md = report.header("preview");
+                md.push_str(&format!(
+                    "Each scene runs with the paper's `s_crit` and with the `fracture_energy` \
+                     that gives it at the middle resolution. A fragment is large from {:.0}% of the \
+                     mass. The damaged radius is the mass-weighted RMS distance of the particles \
+                     with damage of at least {} from their centre, at rest.\n\n",
+                    100.0 * preview::LARGE,
+                    perifrac_bench::fracture::ON_A_CRACK,
+                ));
+                md.push_str(&table.to_markdown());
+                md.push_str(
+                    "\n### Against the middle resolution\n\nThe mass in fragments of another size \
+                     is half the sum of the differences of the large fragments' shares, matched \
+                     largest to largest.\n\n",
+                );
+                md.push_str(&spread.to_markdown());
+                report.write("preview", &md)?;
+            }
+        }
+    }
     Ok(())
 }
 

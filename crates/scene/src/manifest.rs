@@ -191,6 +191,9 @@ pub struct ShellFrameJson {
     /// Runs stepped by Newmark: what the implicit solves did so far.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub newmark: Option<NewmarkJson>,
+    /// Runs with `[[load]]` tables: the work they have done so far (J).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub load_work: Option<f64>,
 }
 
 /// Share of the total mass that [`FrameJson::main_bounds`] frames: the heaviest fragments that

@@ -172,11 +172,23 @@ fn fracture_energy_is_refused_beside_s_crit_or_when_not_positive() {
             Err(e) => e.to_string(),
         }
     };
-    let both = refusal(base.replace("fracture_energy = 8", "fracture_energy = 8\ns_crit = 1e-4"));
-    assert!(
-        both.contains("material[0]") && both.contains("not both"),
-        "{both}"
-    );
+    for other in ["s_crit = 1e-4", "tensile_strength = 5e7"] {
+        let both = refusal(base.replace(
+            "fracture_energy = 8",
+            &format!("fracture_energy = 8\n{other}"),
+        ));
+        assert!(
+            both.contains("material[0]") && both.contains("give one of"),
+            "{both}"
+        );
+    }
+    for bad in ["0.0", "-3.0", "nan"] {
+        let e = refusal(base.replace("fracture_energy = 8", &format!("tensile_strength = {bad}")));
+        assert!(
+            e.contains("material[0].tensile_strength") && e.contains("must be positive"),
+            "{bad}: {e}"
+        );
+    }
     for bad in ["0.0", "-3.0", "nan"] {
         let e = refusal(base.replace("fracture_energy = 8", &format!("fracture_energy = {bad}")));
         assert!(
@@ -197,4 +209,38 @@ fn fracture_energy_is_refused_beside_s_crit_or_when_not_positive() {
     )
     .unwrap();
     assert!(Setup::new(&scene, Some(1)).is_ok());
+}
+
+/// The bar of [`bar`] with `threshold` in place of its fracture energy, its left end held and
+/// its right end pulled at 0.5 m/s for [`STEPS`] steps: broken bonds and damage.
+const STEPS: usize = 40;
+
+fn pulled_bar(threshold: &str) -> (u64, Vec<f64>) {
+    let text = bar(8, 2, 0.01, 8.0, "lattice").replace("fracture_energy = 8", threshold)
+        + "\n[[anchor]]\nregion = { min = [-1.0, -1.0, -1.0], max = [0.01, 1.0, 1.0] }\n\n\
+           [[anchor]]\nregion = { min = [0.07, -1.0, -1.0], max = [1.0, 1.0, 1.0] }\n\
+           velocity = [0.5, 0.0, 0.0]\n";
+    let scene = Scene::parse(&text, Path::new("bar.toml")).unwrap();
+    let mut setup = Setup::new(&scene, Some(1)).unwrap();
+    for _ in 0..STEPS {
+        setup.driver.step().unwrap();
+    }
+    (setup.driver.broken_bonds(), setup.driver.damage())
+}
+
+#[test]
+fn tensile_strength_is_s_crit_times_young() {
+    // 72e9 Pa x 2e-4 = 14.4 MPa: the same threshold, so the same bonds break
+    let by_strain = pulled_bar("s_crit = 2e-4");
+    let by_strength = pulled_bar("tensile_strength = 14.4e6");
+    assert!(by_strain.0 > 0, "nothing broke");
+    assert_eq!(by_strain.0, by_strength.0);
+    assert_eq!(by_strain.1, by_strength.1);
+    // 5% more strength breaks fewer bonds: the pull is still under way
+    let stronger = pulled_bar("tensile_strength = 15.12e6").0;
+    eprintln!(
+        "broken: {} at 14.4 MPa, {stronger} at 15.12 MPa",
+        by_strain.0
+    );
+    assert!(stronger < by_strain.0, "{stronger} against {}", by_strain.0);
 }

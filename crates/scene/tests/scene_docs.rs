@@ -180,7 +180,11 @@ fn shared_tables() -> Vec<(&'static str, &'static [&'static str], String)> {
     let anchor = "[[anchor]]\nregion = { min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 0.0] }";
     let velocity =
         "[[velocity]]\nlinear = [0.0, 0.0, -1.0]\nregion = { min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 1.0] }";
+    let load =
+        "[[load]]\npressure = 1e3\nregion = { min = [-1.0, -1.0, -1.0], max = [1.0, 1.0, 1.0] }";
     let shared: Vec<Shared> = vec![
+        ("[[load]]", &["load"], with(SHELL, load)),
+        ("[load.region]", &["load", "region"], with(SHELL, load)),
         (
             "[[ground]]",
             &["ground"],

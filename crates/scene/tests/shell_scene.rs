@@ -119,6 +119,25 @@ fn tet_only_keys_are_named_as_keys_of_solid_scenes() {
     );
 }
 
+/// The egg breaks by a fracture energy as it does by a strain: 50 J/m^2 gives a threshold of
+/// about 1e-3 across this mesh's triangles (6 to 7 mm wide), under the strain scene's 2e-3.
+#[test]
+fn an_egg_breaks_by_its_fracture_energy() {
+    let text = EGG.replacen("fracture_strain = 2e-3", "fracture_energy = 50.0", 1);
+    let scene = parse(&text).unwrap();
+    let setup = ShellSetup::new(&scene, None, false).unwrap();
+    let params = setup
+        .shell
+        .shell()
+        .model()
+        .fracture_params()
+        .expect("breaks");
+    assert_eq!(params.energy, Some(50.0));
+    let dir = tempfile::tempdir().unwrap();
+    let summary = run(setup, dir.path(), &mut Silent).unwrap();
+    assert!(summary.shell().unwrap().broken_triangles > 0, "{summary:?}");
+}
+
 #[test]
 fn bad_thickness_material_and_placement_are_refused_by_key() {
     for (from, to, key) in [
@@ -129,6 +148,27 @@ fn bad_thickness_material_and_placement_are_refused_by_key() {
             "fracture_strain = 2e-3",
             "fracture_strain = -1.0",
             "material[0].fracture_strain",
+        ),
+        // fracture energy: one threshold key, positive, and a release that spends it
+        (
+            "fracture_strain = 2e-3",
+            "fracture_strain = 2e-3\nfracture_energy = 10.0",
+            "material[0].fracture_energy",
+        ),
+        (
+            "fracture_strain = 2e-3",
+            "fracture_energy = 0.0",
+            "material[0].fracture_energy",
+        ),
+        (
+            "fracture_strain = 2e-3",
+            "fracture_energy = -3.0",
+            "material[0].fracture_energy",
+        ),
+        (
+            "fracture_strain = 2e-3",
+            "fracture_energy = 10.0\nrelease = 0.0",
+            "material[0].release",
         ),
         (
             "subdivisions = 2",

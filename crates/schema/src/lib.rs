@@ -231,6 +231,9 @@ pub struct MaterialSpec {
     /// Fracture energy `G_c` (J/m^2): what a unit area of crack costs. The bond threshold
     /// follows from it, the model's energy and the horizon; give it or `s_crit`.
     pub fracture_energy: Option<f64>,
+    /// Tensile strength (Pa): `s_crit` is it over Young's modulus, the strain at which bonds a
+    /// horizon long break under uniform tension; give it, `s_crit` or `fracture_energy`.
+    pub tensile_strength: Option<f64>,
     /// Damage scaling of the threshold (default 0).
     pub alpha: Option<f64>,
     /// Anisotropy (default isotropic). Chen: the diagonal of `G` in `omega = delta / |G xi|`

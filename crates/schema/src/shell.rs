@@ -12,7 +12,8 @@ use crate::choice::{
     Schema,
 };
 use crate::{
-    AnchorSpec, BallSpec, DtSpec, GroundSpec, OutputSpec, SceneFile, ShellIntegrator, VelocitySpec,
+    AnchorSpec, BallSpec, DtSpec, GroundSpec, LoadSpec, OutputSpec, SceneFile, ShellIntegrator,
+    VelocitySpec,
 };
 
 /// A whole thin-shell scene file.
@@ -38,6 +39,10 @@ pub struct ShellSceneFile {
     /// Initial velocities (as in tet scenes, of the vertices).
     #[serde(default)]
     pub velocity: Vec<VelocitySpec>,
+    /// Loads: a traction on the rim edges, a pressure on the surface or a body force on the
+    /// vertices of a region.
+    #[serde(default)]
+    pub load: Vec<LoadSpec>,
     /// What is written.
     #[serde(default)]
     pub output: ShellOutputSpec,
@@ -105,6 +110,10 @@ pub struct ShellMaterialSpec {
     /// The principal strain at which a triangle breaks, in tension and compression alike
     /// (dimensionless); absent: no fracture.
     pub fracture_strain: Option<f64>,
+    /// Fracture energy `G_c` (J/m^2): a triangle breaks where releasing the stress across the
+    /// split would free `G_c` times its area of crack (`G_c h` per metre); exclusive with
+    /// `fracture_strain`.
+    pub fracture_energy: Option<f64>,
     /// The tensile threshold alone (overrides `fracture_strain` in tension).
     pub tensile_strain: Option<f64>,
     /// The compressive threshold alone, as a magnitude (overrides `fracture_strain` in

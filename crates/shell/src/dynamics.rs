@@ -2,7 +2,9 @@
 //! Verlet) by default, with the estimate of its stable step, or implicit Newmark
 //! ([`newmark`], the paper's production integrator) when set.
 
+mod loads;
 mod newmark;
+pub use loads::ShellLoad;
 pub use newmark::{NewmarkConfig, NewmarkStats};
 
 use hashbrown::HashMap;
@@ -32,6 +34,8 @@ pub(crate) struct Snapshot {
     acc: Vec<Vec3>,
     /// The contact radii (a step regrows forgiven ones).
     radii: Vec<f64>,
+    /// The loads' work (J).
+    load_work: f64,
     /// Self-contact's forgiven overlaps (a step regrows them).
     forgiven: HashMap<PairKey, f64>,
     /// The colliders' moving state (balls).
@@ -76,6 +80,10 @@ pub struct ShellDynamics {
     newmark: Option<Box<newmark::Newmark>>,
     /// Counts changes of the mesh and of the held set (the implicit step's matrix follows it).
     topology: u64,
+    /// Forces from outside (tractions, pressures, body forces) and their work.
+    loads: loads::Loads,
+    /// The positions before an implicit step, for the loads' work (empty without loads).
+    before: Vec<Vec3>,
 }
 
 impl ShellDynamics {
@@ -106,6 +114,8 @@ impl ShellDynamics {
             self_energy: 0.0,
             newmark: None,
             topology: 0,
+            loads: loads::Loads::default(),
+            before: Vec::new(),
         })
     }
 
@@ -128,6 +138,7 @@ impl ShellDynamics {
         s.elastic = self.elastic;
         s.self_energy = self.self_energy;
         s.time = self.time;
+        s.load_work = self.loads.work;
         match &self.newmark {
             Some(nm) => s.acc.clone_from(&nm.acc),
             None => s.acc.clear(),
@@ -152,6 +163,7 @@ impl ShellDynamics {
         self.elastic = s.elastic;
         self.self_energy = s.self_energy;
         self.time = s.time;
+        self.loads.work = s.load_work;
         if let Some(nm) = &mut self.newmark {
             nm.acc.clone_from(&s.acc);
         }
@@ -180,6 +192,7 @@ impl ShellDynamics {
         w.f64(self.elastic);
         w.f64(self.time);
         w.f64(self.self_energy);
+        w.f64(self.loads.work);
         w.u64(self.topology);
         w.array(&self.radii);
         w.array(&self.contact_mass);
@@ -226,6 +239,7 @@ impl ShellDynamics {
         self.elastic = r.f64("elastic energy")?;
         self.time = r.f64("time")?;
         self.self_energy = r.f64("self-contact energy")?;
+        self.loads.work = r.f64("work of the loads")?;
         self.topology = r.u64("mesh changes")?;
         r.array_vec("contact radii", &mut self.radii)?;
         r.array_vec("contact reference masses", &mut self.contact_mass)?;
@@ -431,6 +445,27 @@ impl ShellDynamics {
         }
     }
 
+    /// Sets the loads on the vertices (replacing any), each checked against the vertex count.
+    pub fn set_loads(&mut self, loads: Vec<ShellLoad>) -> Result<(), ShellError> {
+        for l in &loads {
+            l.check(self.x.len())?;
+        }
+        self.loads.loads = loads;
+        Ok(())
+    }
+
+    /// The work (J) the loads have done so far.
+    pub fn load_work(&self) -> f64 {
+        self.loads.work
+    }
+
+    /// The forces (N) on each vertex at the current positions: elastic, contact and
+    /// self-contact, without gravity or damping. A held vertex's holder supplies their
+    /// opposite.
+    pub fn forces(&self) -> &[Vec3] {
+        &self.f
+    }
+
     /// Simulated time (s).
     pub fn time(&self) -> f64 {
         self.time
@@ -505,11 +540,22 @@ impl ShellDynamics {
             });
         }
         if self.newmark.is_some() {
+            if !self.loads.loads.is_empty() {
+                self.before.clone_from(&self.x);
+            }
             self.newmark_step(dt)?;
+            if !self.loads.loads.is_empty() {
+                self.loads.step_work(self.time, &self.before, &self.x);
+            }
             self.regrow_bands();
             return Ok(());
         }
+        // The loads' half kicks come first: the damping then scales them with the rest.
+        let (masses, pinned) = (self.model.masses(), &self.pinned);
+        self.loads
+            .kick(self.time, 0.5 * dt, &mut self.v, masses, pinned);
         self.kick(0.5 * dt);
+        self.loads.drift_work(self.time, dt, &self.v);
         for (x, v) in self.x.iter_mut().zip(&self.v) {
             *x = axpy(*x, dt, *v);
         }
@@ -527,6 +573,9 @@ impl ShellDynamics {
             self.collider_seconds += started.elapsed().as_secs_f64();
         }
         self.add_self_contact()?;
+        let (masses, pinned) = (self.model.masses(), &self.pinned);
+        self.loads
+            .kick(self.time + dt, 0.5 * dt, &mut self.v, masses, pinned);
         self.kick(0.5 * dt);
         self.time += dt;
         self.regrow_bands();

@@ -48,6 +48,10 @@ pub struct ShellFracture {
     /// broken triangles' energy and keeps them from breaking again at once. Bending is not
     /// released (see docs/DECISIONS.md, "Release at the crack").
     pub release: f64,
+    /// Fracture energy `G_c` (J/m^2), when the material gives one: a triangle also breaks
+    /// where its principal strain passes [`energy_strain`] across its width along the
+    /// principal direction (the lower of that and the strain thresholds governs).
+    pub energy: Option<f64>,
 }
 
 impl ShellFracture {
@@ -89,7 +93,67 @@ impl ShellFracture {
             compressive,
             budge,
             release,
+            energy: None,
         })
+    }
+
+    /// These settings with the fracture energy `g_c` (J/m^2, finite and > 0) as a threshold
+    /// too.
+    pub fn with_energy(mut self, g_c: f64) -> Result<ShellFracture, ShellError> {
+        if !(g_c.is_finite() && g_c > 0.0) {
+            return Err(ShellError::BadSetting {
+                what: "shell fracture energy (J/m^2)",
+                expected: "finite and > 0",
+                value: g_c,
+            });
+        }
+        self.energy = Some(g_c);
+        Ok(self)
+    }
+}
+
+/// The principal strain (1) at which a triangle `width` wide (m) along the principal direction
+/// releases `g_c` (J/m^2) per unit area of crack: `sqrt(4 g_c / ((1 - nu^2) young width))`.
+///
+/// A split runs through a vertex perpendicular to the principal direction, so the triangle's
+/// area is half the split's length times `width`. Releasing the stress across the split (as
+/// [`ShellFracture::release`] 1 does; a share under 1 raises the threshold by one over its
+/// square root) frees `(1 - nu^2) young e^2 / 2` a unit volume under
+/// stress along the principal direction alone (the strain along the crack stays). Over the
+/// triangle, per unit area of crack, that is `(1 - nu^2) young e^2 width / 4`; setting it to
+/// `g_c` gives the threshold (docs/DECISIONS.md, "Shell fracture energy").
+pub fn energy_strain(g_c: f64, young: f64, poisson: f64, width: f64) -> f64 {
+    (4.0 * g_c / ((1.0 - poisson * poisson) * young * width)).sqrt()
+}
+
+/// The width (m) of the triangle with plane points `pts` along the unit direction `dir`.
+fn width_along(pts: &[[f64; 2]; 3], dir: [f64; 2]) -> f64 {
+    let p = pts.map(|q| q[0] * dir[0] + q[1] * dir[1]);
+    p[0].max(p[1]).max(p[2]) - p[0].min(p[1]).min(p[2])
+}
+
+/// The largest principal strain of `t` over its threshold, in tension or compression, with its
+/// direction. `pts` (the triangle's plane points) and `energy` `(g_c, young, poisson)` give the
+/// energy threshold, when the material has one.
+fn face_ratio(
+    t: [f64; 3],
+    params: &ShellFracture,
+    energy: Option<(f64, f64, f64, &[[f64; 2]; 3])>,
+) -> (f64, [f64; 2]) {
+    let [(hi, dhi), (lo, dlo)] = principal(t);
+    let limit = |strain: f64, dir: [f64; 2]| match energy {
+        // Only `release` of the energy goes at a split: the threshold rises to make up.
+        Some((g, e, nu, pts)) => {
+            strain.min(energy_strain(g, e, nu, width_along(pts, dir)) / params.release.sqrt())
+        }
+        None => strain,
+    };
+    let up = hi / limit(params.tensile, dhi);
+    let down = -lo / limit(params.compressive, dlo);
+    if down > up {
+        (down, dlo)
+    } else {
+        (up, dhi)
     }
 }
 
@@ -282,46 +346,50 @@ impl ShellModel {
     /// its rest frame. Empty for a shell that does not break.
     pub fn fracture_ratios(&mut self, x: &[Vec3]) -> Result<Vec<(f64, [f64; 2])>, ShellError> {
         self.check_positions(x.len())?;
-        let Some(fs) = &self.fracture else {
+        let Some(params) = self.fracture.as_ref().map(|fs| fs.params) else {
             return Ok(Vec::new());
         };
-        let params = fs.params;
         self.edge_pass(x);
-        let h = self.material.thickness;
-        let fe = self.mesh.face_edges();
-        let plastic = self.plastic.as_ref();
-        Ok(self
-            .faces
-            .iter()
-            .enumerate()
-            .map(|(f, r)| {
-                let e = fe[f];
-                let mut s = e.map(|k| self.edge_work[k as usize].s);
-                let mut d = e.map(|k| self.edge_work[k as usize].dphi);
-                if let Some(p) = plastic {
-                    for k in 0..3 {
-                        s[k] -= p.s[f][k];
-                        d[k] -= p.phi[f][k];
-                    }
-                }
-                let (em, ec) = (combine(&r.m, s), combine(&r.n, d));
-                let mut best = (0.0, [1.0, 0.0]);
-                for z in [0.5 * h, -0.5 * h] {
-                    let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
-                    // The largest tension against the tensile threshold and the largest
-                    // compression against the compressive one: both, as they may differ.
-                    let [(hi, dhi), (lo, dlo)] = principal(t);
-                    for (ratio, dir) in
-                        [(hi / params.tensile, dhi), (-lo / params.compressive, dlo)]
-                    {
-                        if ratio > best.0 {
-                            best = (ratio, dir);
-                        }
-                    }
-                }
-                best
-            })
+        Ok((0..self.faces.len())
+            .map(|f| self.triangle_ratio(f, &params))
             .collect())
+    }
+
+    /// Triangle `f`'s largest principal elastic strain on either face over its threshold, with
+    /// the principal direction in its rest frame, from the last edge pass.
+    fn triangle_ratio(&self, f: usize, params: &ShellFracture) -> (f64, [f64; 2]) {
+        let r = &self.faces[f];
+        let e = self.mesh.face_edges()[f];
+        let mut s = e.map(|k| self.edge_work[k as usize].s);
+        let mut d = e.map(|k| self.edge_work[k as usize].dphi);
+        if let Some(p) = &self.plastic {
+            for k in 0..3 {
+                s[k] -= p.s[f][k];
+                d[k] -= p.phi[f][k];
+            }
+        }
+        let (em, ec) = (combine(&r.m, s), combine(&r.n, d));
+        let rest = self.mesh.vertices();
+        let pts = params
+            .energy
+            .map(|_| plane_points(self.mesh.triangles()[f].map(|i| rest[i as usize])));
+        let (young, nu) = (self.material.young, self.material.poisson);
+        let energy = params
+            .energy
+            .zip(pts.as_ref())
+            .map(|(g, p)| (g, young, nu, p));
+        let h = self.material.thickness;
+        let mut best = (0.0, [1.0, 0.0]);
+        for z in [0.5 * h, -0.5 * h] {
+            let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
+            // The largest tension against the tensile threshold and the largest compression
+            // against the compressive one: both, as they may differ.
+            let (ratio, dir) = face_ratio(t, params, energy);
+            if ratio > best.0 {
+                best = (ratio, dir);
+            }
+        }
+        best
     }
 
     /// Breaks every triangle over its threshold at positions `x` (m), velocities `v` (m/s):
@@ -348,39 +416,15 @@ impl ShellModel {
     /// break), computed in parallel without allocating.
     pub fn worst_fracture_ratio(&mut self, x: &[Vec3]) -> Result<f64, ShellError> {
         self.check_positions(x.len())?;
-        let Some(fs) = &self.fracture else {
+        let Some(params) = self.fracture.as_ref().map(|fs| fs.params) else {
             return Ok(0.0);
         };
-        let params = fs.params;
         self.edge_pass(x);
-        let h = self.material.thickness;
-        let fe = self.mesh.face_edges();
-        let plastic = self.plastic.as_ref();
-        let ew = &self.edge_work;
-        Ok(self
-            .faces
-            .par_iter()
+        let this = &*self;
+        Ok((0..this.faces.len())
+            .into_par_iter()
             .with_min_len(512)
-            .enumerate()
-            .map(|(f, r)| {
-                let e = fe[f];
-                let mut s = e.map(|k| ew[k as usize].s);
-                let mut d = e.map(|k| ew[k as usize].dphi);
-                if let Some(p) = plastic {
-                    for k in 0..3 {
-                        s[k] -= p.s[f][k];
-                        d[k] -= p.phi[f][k];
-                    }
-                }
-                let (em, ec) = (combine(&r.m, s), combine(&r.n, d));
-                let mut worst: f64 = 0.0;
-                for z in [0.5 * h, -0.5 * h] {
-                    let t = [em[0] + z * ec[0], em[1] + z * ec[1], em[2] + z * ec[2]];
-                    let [(hi, _), (lo, _)] = principal(t);
-                    worst = worst.max(hi / params.tensile).max(-lo / params.compressive);
-                }
-                worst
-            })
+            .map(|f| this.triangle_ratio(f, &params).0)
             .reduce(|| 0.0, f64::max))
     }
 

@@ -35,7 +35,7 @@ pub mod proximity;
 pub mod search;
 pub mod self_contact;
 
-pub use dynamics::{max_frequency, NewmarkConfig, NewmarkStats, ShellDynamics};
+pub use dynamics::{max_frequency, NewmarkConfig, NewmarkStats, ShellDynamics, ShellLoad};
 pub use error::ShellError;
 pub use fracture::{FractureEvent, FractureReport, ShellFracture};
 pub use material::ShellMaterial;

@@ -147,7 +147,10 @@ pub(super) fn summary(s: &Summary, wall: f64, resumed_at: u64, threads: usize, d
         s.time,
     );
     let balls = s.solid().map_or(0.0, |b| b.ball_kinetic_energy);
-    let loads = s.solid().and_then(|b| b.load_work);
+    let loads = match &s.body {
+        BodySummary::Solid(b) => b.load_work,
+        BodySummary::Shell(b) => b.load_work,
+    };
     eprintln!(
         "energy at the end: kinetic {:.4e} J, elastic {:.4e} J{}{}",
         s.kinetic_energy,

@@ -51,6 +51,8 @@ pub struct ShellSummary {
     pub collider_seconds: f64,
     /// What the implicit Newmark solves did (`None`: explicit steps).
     pub newmark: Option<perifrac_shell::NewmarkStats>,
+    /// Runs with `[[load]]` tables: the work they did (J).
+    pub load_work: Option<f64>,
 }
 
 /// A thin shell being run.
@@ -231,6 +233,7 @@ impl Body for Shell {
             }),
             collider_seconds: s.collider_seconds(),
             newmark: self.info.newmark.map(|_| s.newmark_stats()),
+            load_work: self.info.loads.then(|| s.load_work()),
         })
     }
 }
@@ -336,6 +339,7 @@ impl Shell {
                 mesh_triangles: model.mesh().triangles().len(),
                 mesh_vertices: x.len(),
                 yielded: model.yielded(),
+                load_work: self.info.loads.then(|| shell.load_work()),
                 newmark: self.info.newmark.map(|_| {
                     let st = shell.newmark_stats();
                     NewmarkJson {

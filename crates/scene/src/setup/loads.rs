@@ -4,7 +4,7 @@ use perifrac_physics::{AnchorMotion, Loads};
 
 use crate::driver::Releases;
 use crate::error::SceneError;
-use crate::schema::{Region, SceneFile, VelocitySpec};
+use crate::schema::{LoadSpec, Region, SceneFile, VelocitySpec};
 
 use super::check::Ctx;
 use crate::environment::RegionLoad;
@@ -113,6 +113,26 @@ pub(crate) fn select(
     Ok(picked)
 }
 
+/// A `[[load]]` table's ramp (s, 0 when absent) and end time (s, infinity when absent),
+/// checked; `key` names the table.
+pub(crate) fn timing(ctx: &Ctx, key: &str, l: &LoadSpec) -> Result<(f64, f64), SceneError> {
+    let ramp = match l.ramp {
+        Some(t) => ctx.non_negative(&format!("{key}.ramp"), t)?,
+        None => 0.0,
+    };
+    let until = match l.until {
+        Some(t) if t.is_nan() || t <= 0.0 => {
+            return Err(ctx.err(
+                format!("{key}.until"),
+                format!("{t} s must be positive (inf: never)"),
+            ))
+        }
+        Some(t) => t,
+        None => f64::INFINITY,
+    };
+    Ok((ramp, until))
+}
+
 /// The `[[load]]` tables as forces (N) on particles at full strength, from the rest mesh
 /// (before any initial crack): a traction or pressure on the boundary faces whose centroid lies
 /// in the region, summed into each face's tet; a body force on the particles in it, times each
@@ -130,20 +150,7 @@ pub(super) fn region_loads(
         if let Some(r) = &l.region {
             ctx.region(&format!("{key}.region"), r)?;
         }
-        let ramp = match l.ramp {
-            Some(t) => ctx.non_negative(&format!("{key}.ramp"), t)?,
-            None => 0.0,
-        };
-        let until = match l.until {
-            Some(t) if t.is_nan() || t <= 0.0 => {
-                return Err(ctx.err(
-                    format!("{key}.until"),
-                    format!("{t} s must be positive (inf: never)"),
-                ))
-            }
-            Some(t) => t,
-            None => f64::INFINITY,
-        };
+        let (ramp, until) = timing(ctx, &key, l)?;
         let (particles, forces) = match (l.traction, l.pressure, l.body_force) {
             (Some(t), None, None) => {
                 let t = ctx.finite3(&format!("{key}.traction"), t)?;

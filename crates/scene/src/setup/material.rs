@@ -186,15 +186,34 @@ pub(super) fn fracture(
     m: &MaterialSpec,
 ) -> Result<Option<FractureParams>, SceneError> {
     let key = format!("material[{i}]");
-    let s_crit = match (m.s_crit, m.fracture_energy) {
-        (Some(_), Some(_)) => {
+    let given = [m.s_crit, m.fracture_energy, m.tensile_strength]
+        .iter()
+        .filter(|v| v.is_some())
+        .count();
+    if given > 1 {
+        return Err(ctx.err(
+            &key,
+            "give one of s_crit, fracture_energy (J/m^2) and tensile_strength (Pa): each sets \
+             the same threshold",
+        ));
+    }
+    let strength = match m.tensile_strength {
+        Some(t) if t.is_nan() || t <= 0.0 => {
             return Err(ctx.err(
-                &key,
-                "give either s_crit or fracture_energy, not both (the threshold follows from \
-                 the energy)",
+                format!("{key}.tensile_strength"),
+                format!("{t} Pa must be positive (inf: no fracture)"),
             ))
         }
-        (Some(s), None) => {
+        // s_crit is the strain at which the longest bonds along a uniform tension break
+        Some(t) => {
+            let (k, mu) = elasticity(ctx, i, m)?;
+            Some(t * (3.0 * k + mu) / (9.0 * k * mu))
+        }
+        None => None,
+    };
+    let s_crit = match (m.s_crit.or(strength), m.fracture_energy) {
+        // two at once were refused above
+        (Some(s), _) => {
             if s.is_nan() || s <= 0.0 {
                 return Err(ctx.err(
                     format!("{key}.s_crit"),
@@ -219,7 +238,8 @@ pub(super) fn fracture(
         (None, None) if m.alpha.is_some() => {
             return Err(ctx.err(
                 format!("{key}.alpha"),
-                "alpha scales the fracture threshold: give s_crit or fracture_energy too",
+                "alpha scales the fracture threshold: give s_crit, fracture_energy or \
+                 tensile_strength too",
             ))
         }
         (None, None) => return Ok(None),

@@ -60,7 +60,8 @@ pub fn values(p: Preset) -> PresetValues {
 
 /// `f` with each material's preset filling the keys it does not give. Young's modulus and
 /// Poisson's ratio are filled only where neither `bulk_modulus` nor `shear_modulus` is given;
-/// the fracture energy only where neither `s_crit` nor `fracture_energy` is.
+/// the fracture energy only where none of `s_crit`, `tensile_strength` and `fracture_energy`
+/// is.
 pub(super) fn resolve(f: &SceneFile) -> SceneFile {
     let mut out = f.clone();
     for m in &mut out.material {
@@ -78,7 +79,7 @@ fn fill(m: &mut MaterialSpec) {
         m.poisson.get_or_insert(v.poisson);
     }
     m.density.get_or_insert(v.density);
-    if m.s_crit.is_none() {
+    if m.s_crit.is_none() && m.tensile_strength.is_none() {
         m.fracture_energy.get_or_insert(v.fracture_energy);
     }
 }

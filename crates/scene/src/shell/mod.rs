@@ -16,6 +16,7 @@
 //! # Ok::<(), perifrac_scene::SceneError>(())
 //! ```
 
+mod loads;
 mod setup;
 
 pub use perifrac_schema::is_shell_scene;

@@ -109,6 +109,8 @@ pub struct ShellSetupInfo {
     pub breaks: bool,
     /// Whether the shell's pieces repel each other.
     pub self_contact: bool,
+    /// Whether the scene has `[[load]]` tables.
+    pub loads: bool,
     /// Wall time of the setup.
     pub time: Duration,
 }
@@ -326,6 +328,18 @@ impl ShellSetup {
                 }
             }
         }
+        let loads = super::loads::shell_loads(
+            &ctx,
+            &f.load,
+            shell.model().mesh(),
+            thickness,
+            shell.model().masses(),
+            m.density,
+        )?;
+        let loaded = !loads.is_empty();
+        shell
+            .set_loads(loads)
+            .map_err(|e| ctx.err("load", e.to_string()))?;
         // Colliders: each vertex a sphere of half the thickness, stiffness factor E h / 2.
         let radius = 0.5 * thickness;
         let masses = shell.model().masses().to_vec();
@@ -433,6 +447,7 @@ impl ShellSetup {
             plastic: m.yield_strain.is_some(),
             breaks,
             self_contact: sim.self_contact.unwrap_or(false),
+            loads: loaded,
             time: started.elapsed(),
         };
         let shell =
@@ -482,8 +497,23 @@ fn shell_material(ctx: &Ctx, f: &ShellSceneFile) -> Result<ShellMaterial, SceneE
 fn fracture(ctx: &Ctx, f: &ShellSceneFile) -> Result<Option<ShellFracture>, SceneError> {
     let m = &f.material[0];
     let both = m.fracture_strain;
+    let energy = match (m.fracture_energy, both) {
+        (Some(_), Some(_)) => {
+            return Err(ctx.err(
+                "material[0].fracture_energy",
+                "give fracture_energy (J/m^2) or fracture_strain, not both",
+            ))
+        }
+        (Some(g), None) if !(g.is_finite() && g > 0.0) => {
+            return Err(ctx.err(
+                "material[0].fracture_energy",
+                format!("{} J/m^2 must be positive and finite", show(g)),
+            ))
+        }
+        (g, _) => g,
+    };
     let (tensile, compressive) = match (m.tensile_strain.or(both), m.compressive_strain.or(both)) {
-        (None, None) => {
+        (None, None) if energy.is_none() => {
             for (k, set) in [
                 ("budge", m.budge.is_some()),
                 ("release", m.release.is_some()),
@@ -491,14 +521,14 @@ fn fracture(ctx: &Ctx, f: &ShellSceneFile) -> Result<Option<ShellFracture>, Scen
                 if set {
                     return Err(ctx.err(
                         format!("material[0].{k}"),
-                        "a fracture setting: give fracture_strain (or tensile_strain and \
-                         compressive_strain) too",
+                        "a fracture setting: give fracture_energy or fracture_strain (or \
+                         tensile_strain and compressive_strain) too",
                     ));
                 }
             }
             return Ok(None);
         }
-        // One threshold alone: the other side never breaks.
+        // One threshold alone: the other side never breaks (or breaks by the energy alone).
         (t, c) => (t.unwrap_or(f64::INFINITY), c.unwrap_or(f64::INFINITY)),
     };
     for (key, v, given) in [
@@ -531,11 +561,24 @@ fn fracture(ctx: &Ctx, f: &ShellSceneFile) -> Result<Option<ShellFracture>, Scen
             format!("{} must be in [0, 1]", show(release)),
         ));
     }
+    if energy.is_some() && release == 0.0 {
+        return Err(ctx.err(
+            "material[0].release",
+            "0 releases no energy at a crack, so fracture_energy could never be spent: give a \
+             release above 0",
+        ));
+    }
     // An infinite threshold stands for "never": the largest finite one does the same.
     let cap = |v: f64| if v.is_finite() { v } else { f64::MAX };
-    ShellFracture::new(cap(tensile), cap(compressive), budge, release)
-        .map(Some)
-        .map_err(|e| ctx.err("material[0]", e.to_string()))
+    let params = ShellFracture::new(cap(tensile), cap(compressive), budge, release)
+        .map_err(|e| ctx.err("material[0]", e.to_string()))?;
+    match energy {
+        Some(g) => params
+            .with_energy(g)
+            .map(Some)
+            .map_err(|e| ctx.err("material[0].fracture_energy", e.to_string())),
+        None => Ok(Some(params)),
+    }
 }
 
 /// A surface error, named after its file when the surface is read from one.

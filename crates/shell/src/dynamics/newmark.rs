@@ -376,6 +376,14 @@ impl ShellDynamics {
                 nm.y[i] = axpy(drift, 0.5 * h * h, a);
             }
         }
+        // Loads at the step's end enter as gravity does: the potential -F.x.
+        self.loads.shift(
+            self.time + h,
+            beta * h * h,
+            &mut nm.target,
+            masses,
+            &self.pinned,
+        );
         // The colliders' lagged state for the step.
         let nb = match &mut self.colliders {
             Some(c) => {
@@ -422,7 +430,8 @@ impl ShellDynamics {
             .filter(|(_, &p)| !p)
             .map(|(f, _)| dot(*f, *f).sqrt())
             .chain(masses.iter().map(|m| m * dot(g, g).sqrt()))
-            .fold(self.model.force_scale(), f64::max);
+            .fold(self.model.force_scale(), f64::max)
+            .max(self.loads.largest(self.time + h));
         // At short steps the inertia term's round-off (a few ulps of the positions, times
         // m / (beta h^2)) can pass the tolerance: no iteration gets below it.
         let floor = nm
@@ -550,6 +559,14 @@ impl ShellDynamics {
             *v = scale(axpy(axpy(*v, h * (1.0 - gamma), *acc), h * gamma, a), keep);
             *acc = a;
         }
+        self.loads.finish(
+            self.time + h,
+            gamma * h * keep,
+            &mut self.v,
+            &mut nm.acc,
+            masses,
+            &self.pinned,
+        );
         self.time += h;
         if !(self.elastic.is_finite() && self.self_energy.is_finite()) {
             return Err(ShellError::RanAway { time: self.time });
