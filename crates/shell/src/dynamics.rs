@@ -82,8 +82,6 @@ pub struct ShellDynamics {
     topology: u64,
     /// Forces from outside (tractions, pressures, body forces) and their work.
     loads: loads::Loads,
-    /// The positions before an implicit step, for the loads' work (empty without loads).
-    before: Vec<Vec3>,
 }
 
 impl ShellDynamics {
@@ -115,7 +113,6 @@ impl ShellDynamics {
             newmark: None,
             topology: 0,
             loads: loads::Loads::default(),
-            before: Vec::new(),
         })
     }
 
@@ -540,13 +537,9 @@ impl ShellDynamics {
             });
         }
         if self.newmark.is_some() {
-            if !self.loads.loads.is_empty() {
-                self.before.clone_from(&self.x);
-            }
+            self.loads.remember(&self.x);
             self.newmark_step(dt)?;
-            if !self.loads.loads.is_empty() {
-                self.loads.step_work(self.time, &self.before, &self.x);
-            }
+            self.loads.step_work(self.time, &self.x);
             self.regrow_bands();
             return Ok(());
         }

@@ -69,6 +69,8 @@ pub(crate) struct Loads {
     pub loads: Vec<ShellLoad>,
     /// Work done so far (J).
     pub work: f64,
+    /// The loaded vertices' positions (m) before an implicit step, load by load.
+    before: Vec<Vec3>,
 }
 
 impl Loads {
@@ -143,14 +145,28 @@ impl Loads {
         most
     }
 
-    /// Adds the work of the implicit step from `x0` to `x1` (m) that ends at time `t` (s): the
-    /// loads then (as the step applies them) times the displacement.
-    pub fn step_work(&mut self, t: f64, x0: &[Vec3], x1: &[Vec3]) {
+    /// Keeps the loaded vertices' positions `x` (m) before an implicit step.
+    pub fn remember(&mut self, x: &[Vec3]) {
+        self.before.clear();
+        for l in &self.loads {
+            self.before
+                .extend(l.vertices.iter().map(|&i| x[i as usize]));
+        }
+    }
+
+    /// Adds the work of the implicit step that ends at time `t` (s) at positions `x` (m), from
+    /// those [`Loads::remember`] kept: the loads then (as the step applies them) times the
+    /// displacement.
+    pub fn step_work(&mut self, t: f64, x: &[Vec3]) {
         let mut work = 0.0;
-        self.each(t, |i, f| {
-            let d = [0, 1, 2].map(|k| x1[i][k] - x0[i][k]);
-            work += dot(f, d);
-        });
+        let mut before = self.before.iter();
+        for l in &self.loads {
+            let s = l.strength(t);
+            for ((&i, &f), x0) in l.vertices.iter().zip(&l.forces).zip(before.by_ref()) {
+                let d = [0, 1, 2].map(|k| x[i as usize][k] - x0[k]);
+                work += s * dot(f, d);
+            }
+        }
         self.work += work;
     }
 }
